@@ -1,0 +1,48 @@
+//! Shared set-up for the benches: the shared meshes (skipped with a note when absent) and
+//! near-contact poses.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use stochastic_collision::bvh::CollisionMesh;
+use stochastic_collision::mesh::{TriMesh, generate};
+use stochastic_collision::poses::{ApproachPose, near_contact_poses};
+
+/// The shared meshes the benches measure, smallest first.
+pub const SHARED_MESHES: [&str; 6] = [
+    "bunny.obj",
+    "armadillo.obj",
+    "dragon_50k.obj",
+    "stanford-bunny.obj",
+    "small_intestine_100k.obj",
+    "ogre.obj",
+];
+
+/// Directory of the shared meshes (`../shared/assets/meshes`, or `STOCHASTIC_COLLISION_MESHES`).
+pub fn shared_dir() -> PathBuf {
+    match std::env::var_os("STOCHASTIC_COLLISION_MESHES") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes"),
+    }
+}
+
+/// `(name, mesh)` for every shared mesh present, plus two generated ones.
+pub fn bench_meshes() -> Vec<(String, TriMesh)> {
+    let mut out = vec![
+        ("icosphere_20k".to_string(), generate::icosphere(1.0, 5)),
+        ("torus_32k".to_string(), generate::torus(1.0, 0.3, 256, 64)),
+    ];
+    for file in SHARED_MESHES {
+        let path = shared_dir().join(file);
+        match TriMesh::from_obj(&path) {
+            Ok(mesh) => out.push((file.trim_end_matches(".obj").to_string(), mesh)),
+            Err(e) => eprintln!("note: skipping {file}: {e}"),
+        }
+    }
+    out
+}
+
+/// Near-contact poses of a mesh against itself: offsets within ±2 % of the size.
+pub fn bench_poses(mesh: &CollisionMesh, count: usize) -> Vec<ApproachPose> {
+    near_contact_poses(mesh, mesh, count, 0.02, 0x5eed)
+}

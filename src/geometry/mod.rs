@@ -1,0 +1,19 @@
+//! Geometric primitives: boxes, poses, the exact triangle–triangle test and closest points.
+//!
+//! Storage is `f32` (glam, as Bevy holds it); every computation whose *sign* decides an answer
+//! runs in `f64` with exact adaptive predicates ([`robust`]), so results stay right on touching,
+//! coplanar and degenerate input, at any scale and far from the origin.
+
+mod aabb;
+mod closest_points;
+mod pose;
+pub mod predicates;
+mod tri_tri;
+
+pub use aabb::Aabb;
+pub use closest_points::{
+    ClosestPoints, closest_point_on_triangle, closest_points_segment_segment,
+    closest_points_triangle_triangle,
+};
+pub use pose::{Pose, PoseF64};
+pub use tri_tri::{triangles_intersect, triangles_intersect_f32};

@@ -1,0 +1,127 @@
+use glam::{DQuat, DVec3, Quat, Vec3};
+
+/// A rigid transform: a rotation followed by a translation (`p ↦ rotation * p + translation`).
+///
+/// Queries take one pose per mesh; internally they work in the first mesh's frame through
+/// [`Pose::inverse_mul`], and transform points in `f64` so that exact predicates see the
+/// transformed geometry with no `f32` rounding.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pose {
+    /// Rotation (unit quaternion).
+    pub rotation: Quat,
+    /// Translation.
+    pub translation: Vec3,
+}
+
+impl Default for Pose {
+    fn default() -> Self {
+        Self::IDENTITY
+    }
+}
+
+impl Pose {
+    /// No rotation, no translation.
+    pub const IDENTITY: Pose = Pose {
+        rotation: Quat::IDENTITY,
+        translation: Vec3::ZERO,
+    };
+
+    /// A pose from its parts. The rotation is normalised.
+    #[inline]
+    pub fn new(translation: Vec3, rotation: Quat) -> Self {
+        Self {
+            rotation: rotation.normalize(),
+            translation,
+        }
+    }
+
+    /// A pure translation.
+    #[inline]
+    pub fn from_translation(translation: Vec3) -> Self {
+        Self {
+            rotation: Quat::IDENTITY,
+            translation,
+        }
+    }
+
+    /// Applies the pose to a point.
+    #[inline]
+    pub fn transform_point(&self, p: Vec3) -> Vec3 {
+        self.rotation * p + self.translation
+    }
+
+    /// Applies the rotation only (to a direction or normal).
+    #[inline]
+    pub fn transform_vector(&self, v: Vec3) -> Vec3 {
+        self.rotation * v
+    }
+
+    /// The inverse transform.
+    #[inline]
+    pub fn inverse(&self) -> Pose {
+        let r = self.rotation.inverse();
+        Pose {
+            rotation: r,
+            translation: -(r * self.translation),
+        }
+    }
+
+    /// `self * other`: apply `other`, then `self`.
+    #[inline]
+    pub fn mul(&self, other: &Pose) -> Pose {
+        Pose {
+            rotation: (self.rotation * other.rotation).normalize(),
+            translation: self.transform_point(other.translation),
+        }
+    }
+
+    /// `self⁻¹ * other`: the pose of `other`'s frame seen from `self`'s frame.
+    #[inline]
+    pub fn inverse_mul(&self, other: &Pose) -> Pose {
+        self.inverse().mul(other)
+    }
+
+    /// This pose in `f64`, for exact work on transformed geometry.
+    #[inline]
+    pub fn to_f64(&self) -> PoseF64 {
+        PoseF64 {
+            rotation: self.rotation.as_dquat().normalize(),
+            translation: self.translation.as_dvec3(),
+        }
+    }
+}
+
+/// A [`Pose`] in `f64`: transforms `f32` points with no `f32` rounding.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseF64 {
+    /// Rotation.
+    pub rotation: DQuat,
+    /// Translation.
+    pub translation: DVec3,
+}
+
+impl PoseF64 {
+    /// Applies the pose to a point.
+    #[inline]
+    pub fn transform_point(&self, p: Vec3) -> DVec3 {
+        self.rotation * p.as_dvec3() + self.translation
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn inverse_mul_composes_to_the_relative_pose() {
+        let a = Pose::new(Vec3::new(1.0, 2.0, 3.0), Quat::from_rotation_y(0.7));
+        let b = Pose::new(Vec3::new(-4.0, 0.5, 2.0), Quat::from_rotation_x(-1.2));
+        let rel = a.inverse_mul(&b);
+        let p = Vec3::new(0.3, -0.2, 0.9);
+        let world = b.transform_point(p);
+        let via = a.transform_point(rel.transform_point(p));
+        assert!((world - via).length() < 1e-5);
+        let d = a.to_f64().transform_point(p);
+        assert!((d.as_vec3() - a.transform_point(p)).length() < 1e-5);
+    }
+}

@@ -1,0 +1,68 @@
+use std::path::PathBuf;
+
+/// Why a mesh could not be built or loaded. Every variant names what is wrong and where.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum MeshError {
+    /// The mesh has no triangles (or no vertices).
+    #[error(
+        "empty mesh: {vertices} vertices and {triangles} triangles; at least one triangle is needed"
+    )]
+    Empty {
+        /// Number of vertices given.
+        vertices: usize,
+        /// Number of triangles given.
+        triangles: usize,
+    },
+    /// A triangle refers to a vertex that does not exist.
+    #[error(
+        "triangle {triangle} refers to vertex {index}, but the mesh has only {vertices} vertices"
+    )]
+    IndexOutOfRange {
+        /// Index of the offending triangle.
+        triangle: usize,
+        /// The out-of-range vertex index.
+        index: u32,
+        /// Number of vertices in the mesh.
+        vertices: usize,
+    },
+    /// A vertex coordinate is NaN or infinite.
+    #[error("vertex {vertex} has a non-finite coordinate ({value:?})")]
+    NonFinite {
+        /// Index of the offending vertex.
+        vertex: usize,
+        /// The offending position.
+        value: [f32; 3],
+    },
+    /// The mesh has more vertices than a `u32` index can address.
+    #[error("mesh has {vertices} vertices; at most u32::MAX can be indexed")]
+    TooManyVertices {
+        /// Number of vertices given.
+        vertices: usize,
+    },
+    /// New positions for [`TriMesh::set_positions`] do not match the vertex count.
+    #[error("expected {expected} positions (the mesh's vertex count), got {got}")]
+    PositionCount {
+        /// The mesh's vertex count.
+        expected: usize,
+        /// The number of positions given.
+        got: usize,
+    },
+    /// The file could not be read.
+    #[error("cannot read {path}: {message}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The operating system's reason.
+        message: String,
+    },
+    /// The file was read but is not a valid OBJ mesh.
+    #[error("{path}:{line}: {message}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// 1-based line number (0 when the problem is not tied to one line).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+}

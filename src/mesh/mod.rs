@@ -1,0 +1,17 @@
+//! Triangle meshes: validated storage ([`TriMesh`]), adjacency ([`Topology`]), OBJ loading and
+//! generators for tests and examples ([`generate`]).
+//!
+//! Degenerate (zero-area) triangles, duplicate and unreferenced vertices, open boundaries and
+//! non-manifold edges are all *valid* input: every query in this crate stays correct on them.
+//! Only what cannot be a mesh is refused ([`MeshError`]): no triangles, an index out of range,
+//! a coordinate that is NaN or infinite, an unreadable or malformed file.
+
+mod error;
+pub mod generate;
+mod obj;
+mod topology;
+mod tri_mesh;
+
+pub use error::MeshError;
+pub use topology::{Edge, Topology};
+pub use tri_mesh::TriMesh;

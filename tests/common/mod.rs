@@ -1,0 +1,37 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// Environment variable that turns a missing shared mesh into a test failure (set by `.ci/run`).
+pub const REQUIRE_SHARED: &str = "STOCHASTIC_COLLISION_REQUIRE_SHARED_MESHES";
+
+/// Directory of the shared third-party meshes (`../shared/assets/meshes` beside the project),
+/// overridable with `STOCHASTIC_COLLISION_MESHES`.
+pub fn shared_mesh_dir() -> PathBuf {
+    match std::env::var_os("STOCHASTIC_COLLISION_MESHES") {
+        Some(dir) => PathBuf::from(dir),
+        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes"),
+    }
+}
+
+/// Path of a shared mesh file, or `None` (with a printed note) when the shared meshes are not
+/// there, as on a user's fresh clone. Panics instead when [`REQUIRE_SHARED`] is set, so CI
+/// cannot pass by skipping.
+pub fn shared_mesh(file: &str) -> Option<PathBuf> {
+    let path = shared_mesh_dir().join(file);
+    if path.is_file() {
+        return Some(path);
+    }
+    if std::env::var_os(REQUIRE_SHARED).is_some() {
+        panic!(
+            "shared mesh {} is missing and {REQUIRE_SHARED} is set",
+            path.display()
+        );
+    }
+    eprintln!(
+        "note: skipping: shared mesh {} not found (a fresh clone has no ../shared)",
+        path.display()
+    );
+    None
+}

@@ -1,0 +1,275 @@
+//! The `query` example's command-line contract: output format, agreement with parry on every
+//! shared mesh, and clean rejection of bad input (exit code 2, one line naming file and line).
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use parry3d::math::Pose as ParryPose;
+use parry3d::query::intersection_test;
+use parry3d::shape::TriMesh as ParryMesh;
+use stochastic_collision::bvh::CollisionMesh;
+use stochastic_collision::mesh::{TriMesh, generate};
+use stochastic_collision::poses::{near_contact_poses, write_poses_csv};
+
+/// The example binary that `cargo test` builds next to the test binaries.
+fn query_exe() -> PathBuf {
+    let deps = std::env::current_exe()
+        .unwrap()
+        .parent()
+        .unwrap()
+        .to_path_buf();
+    let exe = deps
+        .parent()
+        .unwrap()
+        .join("examples")
+        .join(format!("query{}", std::env::consts::EXE_SUFFIX));
+    assert!(
+        exe.is_file(),
+        "{} not built (run through `cargo test`)",
+        exe.display()
+    );
+    exe
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("sc_query_cli_{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn write_obj(path: &Path, mesh: &TriMesh) {
+    let mut s = String::new();
+    for p in mesh.positions() {
+        s += &format!("v {} {} {}\n", p.x, p.y, p.z);
+    }
+    for t in mesh.triangles() {
+        s += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    std::fs::write(path, s).unwrap();
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(query_exe()).args(args).output().unwrap()
+}
+
+fn rows(stdout: &[u8]) -> Vec<Vec<String>> {
+    let text = String::from_utf8(stdout.to_vec()).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("index,collides,probability,time_ns,nodes_visited")
+    );
+    lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+/// Runs the example on near-contact poses of `mesh_path` against itself and checks every row
+/// against parry (poses in the touching band excluded, as in the oracle test).
+fn check_against_parry(mesh_path: &Path, count: usize, tag: &str) {
+    let mesh = TriMesh::from_obj(mesh_path).unwrap();
+    let cm = CollisionMesh::new(mesh.clone());
+    let poses = near_contact_poses(&cm, &cm, count, 0.03, 99);
+    let poses_path = scratch(&format!("{tag}_poses.csv"));
+    write_poses_csv(
+        std::fs::File::create(&poses_path).unwrap(),
+        poses.iter().map(|p| p.pose),
+    )
+    .unwrap();
+    let out_path = scratch(&format!("{tag}_out.csv"));
+    let m = mesh_path.to_str().unwrap();
+    let out = run(&[
+        "--a",
+        m,
+        "--b",
+        m,
+        "--poses",
+        poses_path.to_str().unwrap(),
+        "--mode",
+        "exact",
+        "--out",
+        out_path.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows = rows(&std::fs::read(&out_path).unwrap());
+    assert_eq!(rows.len(), poses.len());
+    let parry = ParryMesh::new(mesh.positions().to_vec(), mesh.triangles().to_vec()).unwrap();
+    let mut compared = 0;
+    for (i, (row, p)) in rows.iter().zip(&poses).enumerate() {
+        assert_eq!(row[0], i.to_string());
+        let collides = row[1] == "1";
+        assert_eq!(row[2], if collides { "1" } else { "0" });
+        assert!(row[3].parse::<u64>().unwrap() > 0);
+        assert!(row[4].parse::<u64>().unwrap() >= 1);
+        // Skip the touching band: the answer at the offset must not flip within ±1e-4 of size.
+        if p.offset.abs() < 2e-4 * p.size {
+            continue;
+        }
+        let pp = ParryPose::from_parts(p.pose.translation, p.pose.rotation);
+        let theirs = intersection_test(&ParryPose::IDENTITY, &parry, &pp, &parry)
+            .unwrap()
+            .intersecting;
+        assert_eq!(
+            collides, theirs,
+            "{tag}: pose {i} (offset {} of size {})",
+            p.offset, p.size
+        );
+        compared += 1;
+    }
+    assert!(compared * 10 >= count * 8);
+}
+
+#[test]
+fn exact_mode_agrees_with_parry_on_generated_meshes() {
+    let path = scratch("torus.obj");
+    write_obj(&path, &generate::torus(1.0, 0.3, 40, 12));
+    check_against_parry(&path, 16, "torus");
+}
+
+#[test]
+fn exact_mode_agrees_with_parry_on_every_shared_mesh() {
+    for file in [
+        "bunny.obj",
+        "armadillo.obj",
+        "dragon_50k.obj",
+        "stanford-bunny.obj",
+        "small_intestine_100k.obj",
+        "ogre.obj",
+    ] {
+        if let Some(path) = common::shared_mesh(file) {
+            check_against_parry(&path, 6, file.trim_end_matches(".obj"));
+        }
+    }
+}
+
+#[test]
+fn writes_to_stdout_without_out() {
+    let mesh = scratch("ball.obj");
+    write_obj(&mesh, &generate::icosphere(1.0, 1));
+    let poses = scratch("ball_poses.csv");
+    std::fs::write(
+        &poses,
+        "tx,ty,tz,qx,qy,qz,qw\n1.5,0,0,0,0,0,1\n5,0,0,0,0,0,1\n",
+    )
+    .unwrap();
+    let m = mesh.to_str().unwrap();
+    let out = run(&[
+        "--a",
+        m,
+        "--b",
+        m,
+        "--poses",
+        poses.to_str().unwrap(),
+        "--mode",
+        "exact",
+    ]);
+    assert!(out.status.success());
+    let rows = rows(&out.stdout);
+    assert_eq!(rows.len(), 2);
+    assert_eq!((rows[0][1].as_str(), rows[1][1].as_str()), ("1", "0"));
+}
+
+/// Runs with bad input; asserts exit code 2 and a single stderr line containing `needle`.
+fn rejects(args: &[&str], needle: &str) {
+    let out = run(args);
+    assert_eq!(out.status.code(), Some(2), "args {args:?}");
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.trim_end().lines().count(), 1, "stderr: {err}");
+    assert!(err.contains(needle), "stderr `{err}` lacks `{needle}`");
+    assert!(!err.contains("panicked"));
+}
+
+#[test]
+fn bad_input_exits_2_with_one_clear_line() {
+    let mesh = scratch("good.obj");
+    write_obj(&mesh, &generate::icosphere(1.0, 1));
+    let m = mesh.to_str().unwrap();
+    let good = scratch("good_poses.csv");
+    std::fs::write(&good, "tx,ty,tz,qx,qy,qz,qw\n0,0,0,0,0,0,1\n").unwrap();
+    let g = good.to_str().unwrap();
+    let file = |name: &str, text: &str| {
+        let p = scratch(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+
+    rejects(
+        &[
+            "--a",
+            "/no/such.obj",
+            "--b",
+            m,
+            "--poses",
+            g,
+            "--mode",
+            "exact",
+        ],
+        "/no/such.obj",
+    );
+    let bad_obj = file("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n");
+    rejects(
+        &["--a", m, "--b", &bad_obj, "--poses", g, "--mode", "exact"],
+        "bad.obj:4",
+    );
+    rejects(
+        &[
+            "--a",
+            m,
+            "--b",
+            m,
+            "--poses",
+            "/no/poses.csv",
+            "--mode",
+            "exact",
+        ],
+        "/no/poses.csv",
+    );
+    let short = file("short.csv", "tx,ty,tz,qx,qy,qz,qw\n0,0,0,0,0,0,1\n1,2,3\n");
+    rejects(
+        &["--a", m, "--b", m, "--poses", &short, "--mode", "exact"],
+        "short.csv:3",
+    );
+    let nan = file("nan.csv", "tx,ty,tz,qx,qy,qz,qw\nNaN,0,0,0,0,0,1\n");
+    rejects(
+        &["--a", m, "--b", m, "--poses", &nan, "--mode", "exact"],
+        "nan.csv:2",
+    );
+    let junk = file("junk.csv", "tx,ty,tz,qx,qy,qz,qw\n0,0,zero,0,0,0,1\n");
+    rejects(
+        &["--a", m, "--b", m, "--poses", &junk, "--mode", "exact"],
+        "junk.csv:2",
+    );
+    let header = file("header.csv", "x,y,z\n0,0,0\n");
+    rejects(
+        &["--a", m, "--b", m, "--poses", &header, "--mode", "exact"],
+        "header.csv:1",
+    );
+    rejects(
+        &["--a", m, "--b", m, "--poses", g, "--mode", "magic"],
+        "unknown mode `magic`",
+    );
+    rejects(&["--a", m, "--b", m, "--poses", g], "missing --mode");
+    rejects(
+        &[
+            "--a",
+            m,
+            "--b",
+            m,
+            "--poses",
+            g,
+            "--mode",
+            "exact",
+            "--frobnicate",
+        ],
+        "--frobnicate",
+    );
+    rejects(
+        &["--a", m, "--b", m, "--poses", g, "--mode"],
+        "--mode needs a value",
+    );
+}
