@@ -391,3 +391,85 @@ fn workspace_stops_growing_after_warm_up() {
     assert_eq!(before, ws.retained_bytes());
     assert!(ws.node_pairs_visited() > 0);
 }
+
+/// Checks the tree's invariants: a permutation of the triangles, children after their parent
+/// and adjacent, every box holding its children's boxes and its triangles, leaves within size.
+fn check_tree(mesh: &TriMesh, bvh: &stochastic_collision::bvh::Bvh, max_leaf: u32) {
+    let mut seen = vec![false; mesh.triangle_count()];
+    for &t in bvh.leaf_triangles() {
+        assert!(
+            !std::mem::replace(&mut seen[t as usize], true),
+            "triangle {t} twice"
+        );
+    }
+    assert!(seen.iter().all(|&s| s));
+    let nodes = bvh.nodes();
+    let mut reached = vec![false; nodes.len()];
+    reached[0] = true;
+    for (i, n) in nodes.iter().enumerate() {
+        assert!(reached[i], "node {i} unreachable");
+        if n.is_leaf() {
+            assert!(n.count <= max_leaf);
+            for &t in bvh.triangles_of(n) {
+                mesh.triangle(t as usize)
+                    .iter()
+                    .for_each(|p| assert!(n.aabb().contains_point(*p)));
+            }
+        } else {
+            let l = n.left() as usize;
+            assert!(l > i && l + 1 < nodes.len());
+            for c in [l, l + 1] {
+                reached[c] = true;
+                assert!(
+                    n.aabb().contains_point(nodes[c].min) && n.aabb().contains_point(nodes[c].max)
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn parallel_build_equals_serial_build_and_keeps_invariants() {
+    use stochastic_collision::bvh::{Bvh, BvhBuildOptions};
+    for mesh in [
+        generate::torus(1.0, 0.3, 96, 40),
+        nasty_mesh(),
+        generate::cloth_grid(1.0, 1.0, 60, 60),
+    ] {
+        let serial = Bvh::build_with(
+            &mesh,
+            BvhBuildOptions {
+                parallel_threshold: usize::MAX,
+                ..Default::default()
+            },
+        );
+        let parallel = Bvh::build_with(
+            &mesh,
+            BvhBuildOptions {
+                parallel_threshold: 1024,
+                ..Default::default()
+            },
+        );
+        check_tree(&mesh, &serial, 4);
+        assert_eq!(serial, parallel);
+        let big_leaves = Bvh::build_with(
+            &mesh,
+            BvhBuildOptions {
+                max_leaf_size: 1,
+                bins: 4,
+                ..Default::default()
+            },
+        );
+        check_tree(&mesh, &big_leaves, 1);
+    }
+    // All centroids coincide: split by count, leaves still bounded.
+    let pos: Vec<Vec3> = (0..40)
+        .map(|i| Vec3::new(i as f32 * 1e-3, 0.0, 0.0))
+        .collect();
+    let stacked = TriMesh::new(pos, (0..20).map(|i| [i, 39 - i, 20]).collect()).unwrap();
+    check_tree(
+        &stacked,
+        &stochastic_collision::bvh::Bvh::build(&stacked),
+        4,
+    );
+}

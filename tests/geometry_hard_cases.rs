@@ -1150,3 +1150,80 @@ fn random_float_triangles_match_distance_reference() {
     }
     assert!(hits > 20 && misses > 20, "{hits} {misses}");
 }
+
+/// Near-contact triangle pairs from two icospheres (f32 corners, the second posed in f64) that
+/// parry3d 0.31's triangle–triangle `intersection_test` (on the corners rounded to f32) reports
+/// as intersecting, with distance 0. Dense sampling shows them apart by the distances given.
+#[test]
+fn near_contact_pairs_parry_misjudges() {
+    let cases = [
+        (
+            [
+                v(
+                    -0.5062980055809021,
+                    -0.8598478436470032,
+                    -0.06575755029916763,
+                ),
+                v(
+                    -0.4863796532154083,
+                    -0.8731277585029602,
+                    -0.03290596231818199,
+                ),
+                v(
+                    -0.5163236260414124,
+                    -0.8557615280151367,
+                    -0.032898467034101486,
+                ),
+            ],
+            [
+                v(
+                    -0.47665282143783666,
+                    -0.8777996875377635,
+                    -0.04261703065785907,
+                ),
+                v(
+                    -0.5075321046297573,
+                    -0.8671093349992994,
+                    -0.027097955900530657,
+                ),
+                v(
+                    -0.4839398417649572,
+                    -0.877580448759031,
+                    -0.0040323175378177145,
+                ),
+            ],
+            1.5142515663322447e-3,
+        ),
+        (
+            [
+                v(
+                    -0.7482882738113403,
+                    -0.5450409650802612,
+                    0.37814682722091675,
+                ),
+                v(-0.7610446214675903, -0.5116444230079651, 0.3987869918346405),
+                v(-0.7738109827041626, -0.5195250511169434, 0.3623676300048828),
+            ],
+            [
+                v(
+                    -0.7374032644646286,
+                    -0.4996205269712003,
+                    0.42334357511233567,
+                ),
+                v(-0.7583669230789604, -0.5217453681793791, 0.3962311206929009),
+                v(
+                    -0.7654157239892612,
+                    -0.48323473016712154,
+                    0.40055691060478127,
+                ),
+            ],
+            2.489886167795244e-4,
+        ),
+    ];
+    for (a, b, gap) in cases {
+        assert!(!triangles_intersect(&a, &b) && !triangles_intersect(&b, &a));
+        let r = closest_points_triangle_triangle(&a, &b);
+        assert!((r.distance - gap).abs() < 1e-12, "{r:?}");
+        assert!((ref_triangle_distance(&a, &b) - gap).abs() < 1e-12);
+    }
+}

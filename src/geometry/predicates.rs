@@ -3,9 +3,10 @@
 use glam::DVec3;
 use robust::{Coord3D, orient3d as robust_orient3d};
 
-/// Sign of the volume of tetrahedron `abcd`: positive, negative or exactly 0 when coplanar.
-/// Only the sign is exact.
-#[inline]
+/// Orientation of `d` against the plane of `a, b, c`: positive when `d` is below it (`a, b, c`
+/// counter-clockwise seen from above), i.e. the sign of `-det(b - a, c - a, d - a)`; exactly 0
+/// when the four points are coplanar. Only the sign is exact.
+#[inline(always)]
 pub fn orient3d(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
     let k = |p: DVec3| Coord3D {
         x: p.x,

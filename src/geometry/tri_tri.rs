@@ -23,7 +23,9 @@
 //!   strictly outside (at most 20 `orient2d`).
 
 use glam::{DVec3, Vec3};
-use robust::{Coord, Coord3D, orient2d, orient3d};
+use robust::{Coord, orient2d};
+
+use super::predicates::orient3d as o3;
 
 /// Exact triangle–triangle intersection test. Touching counts as intersecting.
 ///
@@ -122,22 +124,6 @@ pub(crate) fn intersection_point(a: &[DVec3; 3], b: &[DVec3; 3]) -> Option<DVec3
 
 // ---------------------------------------------------------------------------------------------
 // Predicates and small helpers.
-
-#[inline(always)]
-fn c3(p: DVec3) -> Coord3D<f64> {
-    Coord3D {
-        x: p.x,
-        y: p.y,
-        z: p.z,
-    }
-}
-
-/// robust's `orient3d`: positive when `d` is below the plane of `a, b, c` (counterclockwise seen
-/// from above), i.e. `-det(b - a, c - a, d - a)`, with exact sign.
-#[inline(always)]
-fn o3(a: DVec3, b: DVec3, c: DVec3, d: DVec3) -> f64 {
-    orient3d(c3(a), c3(b), c3(c), c3(d))
-}
 
 #[inline(always)]
 fn sign(x: f64) -> i8 {
