@@ -1,5 +1,5 @@
 //! Binned surface-area-heuristic build, parallel over subtrees for large meshes.
-use glam::Vec3A;
+use glam::{Vec3, Vec3A};
 
 use super::tree::{Bvh, BvhNode};
 use crate::mesh::TriMesh;
@@ -12,6 +12,10 @@ pub struct BvhBuildOptions {
     pub max_leaf_size: u32,
     /// Number of SAH bins per axis (clamped to 2..=32).
     pub bins: usize,
+    /// Search split planes on all three axes (`true`) or only along the longest extent of the
+    /// centroids (`false`, the default: about twice as fast to build, and the trees answer
+    /// mesh–mesh queries as fast, as the `exact_vs_parry` bench shows).
+    pub all_axes: bool,
     /// Build subtrees of at least this many triangles on separate threads (`usize::MAX`: never).
     /// Threads are only used when the machine has more than one core.
     pub parallel_threshold: usize,
@@ -22,7 +26,8 @@ impl Default for BvhBuildOptions {
         Self {
             max_leaf_size: 4,
             bins: 16,
-            parallel_threshold: 16_384,
+            all_axes: false,
+            parallel_threshold: 2048,
         }
     }
 }
@@ -62,10 +67,29 @@ impl Bounds {
     }
 }
 
-/// Per-triangle inputs shared by all build threads.
-struct Prims {
-    boxes: Vec<Bounds>,
-    centroids: Vec<Vec3A>,
+/// One triangle's box and index, 32 bytes. The build partitions these in place, so every pass
+/// reads memory in order (indirection through an index array was the build's main cost).
+#[derive(Clone, Copy)]
+#[repr(C)]
+struct Prim {
+    min: Vec3,
+    id: u32,
+    max: Vec3,
+    _pad: u32,
+}
+
+impl Prim {
+    #[inline]
+    fn bounds(&self) -> Bounds {
+        Bounds {
+            min: self.min.into(),
+            max: self.max.into(),
+        }
+    }
+    #[inline]
+    fn centroid(&self) -> Vec3A {
+        (Vec3A::from(self.min) + Vec3A::from(self.max)) * 0.5
+    }
 }
 
 /// Build parameters after clamping.
@@ -73,6 +97,7 @@ struct Prims {
 struct Params {
     max_leaf: usize,
     bins: usize,
+    all_axes: bool,
     parallel_threshold: usize,
 }
 
@@ -98,6 +123,7 @@ impl Bvh {
         let params = Params {
             max_leaf: options.max_leaf_size.clamp(1, 255) as usize,
             bins: options.bins.clamp(2, MAX_BINS),
+            all_axes: options.all_axes,
             parallel_threshold: if cores > 1 {
                 options.parallel_threshold.max(1024)
             } else {
@@ -105,29 +131,27 @@ impl Bvh {
             },
         };
         let pos = mesh.positions();
-        let mut boxes = Vec::with_capacity(mesh.triangle_count());
-        let mut centroids = Vec::with_capacity(mesh.triangle_count());
         let mut bounds = Bounds::EMPTY;
         let mut cbounds = Bounds::EMPTY;
-        for &[a, b, c] in mesh.triangles() {
-            let (a, b, c) = (
-                Vec3A::from(pos[a as usize]),
-                Vec3A::from(pos[b as usize]),
-                Vec3A::from(pos[c as usize]),
-            );
-            let bx = Bounds {
-                min: a.min(b).min(c),
-                max: a.max(b).max(c),
-            };
-            let centroid = (bx.min + bx.max) * 0.5;
-            bounds = bounds.union(&bx);
-            cbounds.grow(centroid);
-            boxes.push(bx);
-            centroids.push(centroid);
-        }
-        let prims = Prims { boxes, centroids };
-        let mut order: Vec<u32> = (0..mesh.triangle_count() as u32).collect();
-        let tree = build_subtree(&prims, &mut order, bounds, cbounds, params);
+        let mut prims: Vec<Prim> = mesh
+            .triangles()
+            .iter()
+            .enumerate()
+            .map(|(id, &[a, b, c])| {
+                let (a, b, c) = (pos[a as usize], pos[b as usize], pos[c as usize]);
+                let prim = Prim {
+                    min: a.min(b).min(c),
+                    id: id as u32,
+                    max: a.max(b).max(c),
+                    _pad: 0,
+                };
+                bounds = bounds.union(&prim.bounds());
+                cbounds.grow(prim.centroid());
+                prim
+            })
+            .collect();
+        let tree = build_subtree(&mut prims, bounds, cbounds, params);
+        let order = prims.iter().map(|p| p.id).collect();
         Bvh {
             nodes: tree.nodes,
             leaf_triangles: order,
@@ -136,26 +160,20 @@ impl Bvh {
     }
 }
 
-/// Builds the subtree over `order` (whose bounds and centroid bounds are given): splits the top
+/// Builds the subtree over `prims` (whose bounds and centroid bounds are given): splits the top
 /// node and recurses on two threads when large, else builds serially.
-fn build_subtree(
-    prims: &Prims,
-    order: &mut [u32],
-    bounds: Bounds,
-    cbounds: Bounds,
-    params: Params,
-) -> Subtree {
-    if order.len() < params.parallel_threshold {
-        return build_serial(prims, order, bounds, cbounds, params);
+fn build_subtree(prims: &mut [Prim], bounds: Bounds, cbounds: Bounds, params: Params) -> Subtree {
+    if prims.len() < params.parallel_threshold {
+        return build_serial(prims, bounds, cbounds, params);
     }
-    let Some(split) = split_node(prims, order, &bounds, &cbounds, params) else {
-        return build_serial(prims, order, bounds, cbounds, params);
+    let mut scratch = [(Bounds::EMPTY, 0); 3 * MAX_BINS];
+    let Some(split) = split_node(prims, &bounds, &cbounds, params, &mut scratch) else {
+        return build_serial(prims, bounds, cbounds, params);
     };
-    let (left_order, right_order) = order.split_at_mut(split.mid);
+    let (left_prims, right_prims) = prims.split_at_mut(split.mid);
     let (left, right) = std::thread::scope(|s| {
-        let handle =
-            s.spawn(|| build_subtree(prims, left_order, split.left.0, split.left.1, params));
-        let right = build_subtree(prims, right_order, split.right.0, split.right.1, params);
+        let handle = s.spawn(|| build_subtree(left_prims, split.left.0, split.left.1, params));
+        let right = build_subtree(right_prims, split.right.0, split.right.1, params);
         (handle.join().expect("BVH build thread panicked"), right)
     });
     merge(&bounds, left, right, split.mid as u32)
@@ -201,23 +219,23 @@ struct Split {
 }
 
 /// Iterative depth-first build of a whole subtree on this thread.
-fn build_serial(
-    prims: &Prims,
-    order: &mut [u32],
-    bounds: Bounds,
-    cbounds: Bounds,
-    params: Params,
-) -> Subtree {
-    let n = order.len();
+fn build_serial(prims: &mut [Prim], bounds: Bounds, cbounds: Bounds, params: Params) -> Subtree {
+    let n = prims.len();
     let mut nodes = Vec::with_capacity(2 * n.div_ceil(params.max_leaf).max(1));
     nodes.push(leaf(&bounds, 0, n));
     let mut depth = 1;
     // (node, start, end, level, bounds, centroid bounds)
     let mut stack = vec![(0usize, 0usize, n, 1u32, bounds, cbounds)];
+    let mut scratch = [(Bounds::EMPTY, 0); 3 * MAX_BINS];
     while let Some((node, start, end, level, bounds, cbounds)) = stack.pop() {
         depth = depth.max(level);
-        let Some(split) = split_node(prims, &mut order[start..end], &bounds, &cbounds, params)
-        else {
+        let Some(split) = split_node(
+            &mut prims[start..end],
+            &bounds,
+            &cbounds,
+            params,
+            &mut scratch,
+        ) else {
             nodes[node] = leaf(&bounds, start, end - start);
             continue;
         };
@@ -246,57 +264,70 @@ fn leaf(b: &Bounds, first: usize, count: usize) -> BvhNode {
     }
 }
 
-/// Decides whether to split `range` and partitions it if so (binned SAH on all three axes in
-/// one pass; by count when no plane separates the centroids). `None`: make a leaf.
+/// Decides whether to split `range` and partitions it if so (binned SAH along the longest
+/// centroid axis, or all three in one pass; by count when no plane separates the centroids).
+/// `None`: make a leaf. `scratch` holds the bins.
 fn split_node(
-    prims: &Prims,
-    range: &mut [u32],
+    range: &mut [Prim],
     bounds: &Bounds,
     cbounds: &Bounds,
     params: Params,
+    scratch: &mut [(Bounds, u32); 3 * MAX_BINS],
 ) -> Option<Split> {
     let count = range.len();
     if count <= 1 {
         return None;
     }
-    let nb = params.bins;
+    // Fewer bins for small nodes: most of a 16-bin sweep over 3 triangles is empty planes.
+    let nb = params.bins.min(count.max(4));
     let extent = cbounds.max - cbounds.min;
     let scale = Vec3A::select(
         extent.cmpgt(Vec3A::ZERO),
         Vec3A::splat(nb as f32) / extent,
         Vec3A::ZERO,
     );
-    let bin_of = |c: Vec3A| -> [usize; 3] {
-        let f = ((c - cbounds.min) * scale).min(Vec3A::splat((nb - 1) as f32));
-        [f.x as usize, f.y as usize, f.z as usize]
+    let last_bin = (nb - 1) as f32;
+    // Scale vectors that keep one axis: the bin index is one multiply and a horizontal sum.
+    let axis_scale = [scale * Vec3A::X, scale * Vec3A::Y, scale * Vec3A::Z];
+    let bin_of = |c: Vec3A, axis: usize| -> usize {
+        ((c - cbounds.min) * axis_scale[axis])
+            .element_sum()
+            .min(last_bin) as usize
     };
-    let mut bins = [[(Bounds::EMPTY, 0u32); MAX_BINS]; 3];
-    for &t in range.iter() {
-        let b = &prims.boxes[t as usize];
-        let idx = bin_of(prims.centroids[t as usize]);
-        for axis in 0..3 {
-            let bin = &mut bins[axis][idx[axis]];
-            bin.0 = bin.0.union(b);
+    let axes = if params.all_axes {
+        0..3
+    } else {
+        let longest = extent.max_position();
+        longest..longest + 1
+    };
+    // Only the bins in use are reset: this runs once per node.
+    let bins = &mut scratch[..3 * nb];
+    for axis in axes.clone() {
+        let bins = &mut bins[axis * nb..(axis + 1) * nb];
+        bins.fill((Bounds::EMPTY, 0));
+        for prim in range.iter() {
+            let bin = &mut bins[bin_of(prim.centroid(), axis)];
+            bin.0 = bin.0.union(&prim.bounds());
             bin.1 += 1;
         }
     }
     let parent_area = bounds.area().max(f32::MIN_POSITIVE);
     let mut best: Option<(usize, usize, f32)> = None; // (axis, last left bin, cost)
-    for axis in 0..3 {
+    for axis in axes {
         if extent[axis] <= 0.0 || !extent[axis].is_finite() {
             continue;
         }
         let mut right_cost = [0.0f32; MAX_BINS];
         let (mut acc, mut acc_n) = (Bounds::EMPTY, 0u32);
         for i in (1..nb).rev() {
-            acc = acc.union(&bins[axis][i].0);
-            acc_n += bins[axis][i].1;
+            acc = acc.union(&bins[axis * nb + i].0);
+            acc_n += bins[axis * nb + i].1;
             right_cost[i] = acc.area() * acc_n as f32;
         }
         let (mut acc, mut acc_n) = (Bounds::EMPTY, 0u32);
         for i in 0..nb - 1 {
-            acc = acc.union(&bins[axis][i].0);
-            acc_n += bins[axis][i].1;
+            acc = acc.union(&bins[axis * nb + i].0);
+            acc_n += bins[axis * nb + i].1;
             if acc_n == 0 || acc_n as usize == count {
                 continue;
             }
@@ -309,17 +340,15 @@ fn split_node(
     }
     match best {
         Some((_, _, cost)) if cost >= count as f32 && count <= params.max_leaf => None,
-        Some((axis, last_left, _)) => {
-            Some(partition(prims, range, |c| bin_of(c)[axis] <= last_left))
-        }
+        Some((axis, last_left, _)) => Some(partition(range, |c| bin_of(c, axis) <= last_left)),
         // No plane separates the centroids (all coincide): split by count.
         None if count > params.max_leaf => {
             let mid = count / 2;
-            let side = |r: &[u32]| {
+            let side = |r: &[Prim]| {
                 let (mut b, mut c) = (Bounds::EMPTY, Bounds::EMPTY);
-                for &t in r {
-                    b = b.union(&prims.boxes[t as usize]);
-                    c.grow(prims.centroids[t as usize]);
+                for prim in r {
+                    b = b.union(&prim.bounds());
+                    c.grow(prim.centroid());
                 }
                 (b, c)
             };
@@ -335,20 +364,20 @@ fn split_node(
 
 /// Moves the triangles whose centroid satisfies `left` to the front, collecting both sides'
 /// bounds and centroid bounds on the way.
-fn partition(prims: &Prims, range: &mut [u32], left: impl Fn(Vec3A) -> bool) -> Split {
+fn partition(range: &mut [Prim], left: impl Fn(Vec3A) -> bool) -> Split {
     let (mut lb, mut lc, mut rb, mut rc) =
         (Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY, Bounds::EMPTY);
     let mut i = 0;
     for j in 0..range.len() {
-        let t = range[j] as usize;
-        let c = prims.centroids[t];
+        let prim = range[j];
+        let c = prim.centroid();
         if left(c) {
-            lb = lb.union(&prims.boxes[t]);
+            lb = lb.union(&prim.bounds());
             lc.grow(c);
             range.swap(i, j);
             i += 1;
         } else {
-            rb = rb.union(&prims.boxes[t]);
+            rb = rb.union(&prim.bounds());
             rc.grow(c);
         }
     }
