@@ -11,25 +11,38 @@
 //! confidence (1 or 0 in exact mode), `time_ns` times the query alone (trees are built before),
 //! `nodes_visited` counts the node pairs whose boxes were tested.
 //!
-//! Modes: `exact` (BVH + exact triangle tests). `--solid` also counts a mesh inside a closed
-//! other mesh as colliding. Bad input (missing or malformed file, NaN, short rows, unknown mode
-//! or flag) exits with code 2 and one line on stderr naming the file and line.
+//! Modes:
+//! - `exact` (BVH + exact triangle tests). `--solid` also counts a mesh inside a closed other
+//!   mesh as colliding.
+//! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--budget-us T |
+//!   --budget-nodes N] [--exact-leaves] [--estimator calibrated|paper|planarity] [--resolution 4]`;
+//!   `probability` is the ADB confidence, `nodes_visited` the node pairs visited.
+//!
+//! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value)
+//! exits with code 2 and one line on stderr naming the file and line.
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use std::time::Instant;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
+use stochastic_collision::adb::{
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, CalibratedEstimator, Decision,
+    PaperEstimator, PlanarityEstimator, adb_intersects,
+};
 use stochastic_collision::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, intersects_with};
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::TriMesh;
 use stochastic_collision::poses::read_poses_csv;
 
-const USAGE: &str =
-    "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact [--solid] [--out results.csv]";
+const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
+[--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--exact-leaves] \
+[--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
 
 /// The query modes; each parses its own flags.
 enum Mode {
     Exact(ExactOptions),
+    Adb { query: AdbQuery, resolution: u32 },
 }
 
 struct Args {
@@ -51,6 +64,10 @@ struct Row {
 fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let (mut a, mut b, mut poses, mut out, mut mode) = (None, None, None, None, None);
     let mut solid = false;
+    let mut adb = AdbQuery::default();
+    let mut resolution = AdbBuildOptions::default().resolution;
+    let mut adb_flags: Vec<&'static str> = Vec::new();
+    let mut budget_flags = 0;
     while let Some(flag) = it.next() {
         let mut value = |name: &str| {
             it.next()
@@ -63,14 +80,85 @@ fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
             "--out" => out = Some(PathBuf::from(value("--out")?)),
             "--mode" => mode = Some(value("--mode")?),
             "--solid" => solid = true,
+            "--p-min" => {
+                adb.p_min = parse_number(&value("--p-min")?, "--p-min", |p: f64| {
+                    (0.0..=1.0).contains(&p)
+                })?;
+                adb_flags.push("--p-min");
+            }
+            "--k-min" => {
+                adb.k_min = parse_number(&value("--k-min")?, "--k-min", |k: u32| k >= 1)?;
+                adb_flags.push("--k-min");
+            }
+            "--budget-us" => {
+                let us: f64 = parse_number(&value("--budget-us")?, "--budget-us", |t: f64| {
+                    t > 0.0 && t.is_finite()
+                })?;
+                adb.budget = Budget::Time(Duration::from_secs_f64(us * 1e-6));
+                budget_flags += 1;
+                adb_flags.push("--budget-us");
+            }
+            "--budget-nodes" => {
+                adb.budget = Budget::NodePairs(parse_number(
+                    &value("--budget-nodes")?,
+                    "--budget-nodes",
+                    |n: u64| n >= 1,
+                )?);
+                budget_flags += 1;
+                adb_flags.push("--budget-nodes");
+            }
+            "--exact-leaves" => {
+                adb.exact_leaves = true;
+                adb_flags.push("--exact-leaves");
+            }
+            "--estimator" => {
+                adb.estimator = match value("--estimator")?.as_str() {
+                    // The papers' method as published, decision rule included.
+                    "paper" => {
+                        adb.decision = Decision::Paper;
+                        Arc::new(PaperEstimator::default())
+                    }
+                    "planarity" => Arc::new(PlanarityEstimator::default()),
+                    "calibrated" => Arc::new(CalibratedEstimator::default()),
+                    other => {
+                        return Err(format!(
+                            "unknown estimator `{other}` (known: calibrated, paper, planarity)"
+                        ));
+                    }
+                };
+                adb_flags.push("--estimator");
+            }
+            "--resolution" => {
+                resolution = parse_number(&value("--resolution")?, "--resolution", |r: u32| {
+                    (1..=8).contains(&r)
+                })?;
+                adb_flags.push("--resolution");
+            }
             "-h" | "--help" => return Err(USAGE.to_string()),
             other => return Err(format!("unknown argument `{other}`; {USAGE}")),
         }
     }
+    if budget_flags > 1 {
+        return Err("give at most one of --budget-us and --budget-nodes".to_string());
+    }
     let missing = |name: &str| format!("missing {name}; {USAGE}");
     let mode = match mode.as_deref() {
-        Some("exact") => Mode::Exact(ExactOptions { solid }),
-        Some(other) => return Err(format!("unknown mode `{other}` (known: exact)")),
+        Some("exact") => {
+            if let Some(flag) = adb_flags.first() {
+                return Err(format!("{flag} applies to --mode adb only"));
+            }
+            Mode::Exact(ExactOptions { solid })
+        }
+        Some("adb") => {
+            if solid {
+                return Err("--solid applies to --mode exact only".to_string());
+            }
+            Mode::Adb {
+                query: adb,
+                resolution,
+            }
+        }
+        Some(other) => return Err(format!("unknown mode `{other}` (known: exact, adb)")),
         None => return Err(missing("--mode")),
     };
     Ok(Args {
@@ -82,28 +170,67 @@ fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     })
 }
 
+/// Parses a flag's value and checks its range.
+fn parse_number<T: std::str::FromStr + Copy>(
+    text: &str,
+    flag: &str,
+    valid: impl Fn(T) -> bool,
+) -> Result<T, String> {
+    match text.parse::<T>() {
+        Ok(v) if valid(v) => Ok(v),
+        _ => Err(format!("{flag}: invalid value `{text}`")),
+    }
+}
+
 fn run(args: Args) -> Result<(), String> {
     let load = |path: &PathBuf| TriMesh::from_obj(path).map_err(|e| e.to_string());
-    let a = CollisionMesh::new(load(&args.a)?);
-    let b = CollisionMesh::new(load(&args.b)?);
+    let (mesh_a, mesh_b) = (load(&args.a)?, load(&args.b)?);
     let poses = read_poses_csv(&args.poses).map_err(|e| e.to_string())?;
-    let mut ws = QueryWorkspace::new();
-    let rows: Vec<Row> = poses
-        .iter()
-        .map(|pose_b| match &args.mode {
-            Mode::Exact(options) => {
-                let start = Instant::now();
-                let outcome = intersects_with(&a, &Pose::IDENTITY, &b, pose_b, options, &mut ws);
-                let time_ns = start.elapsed().as_nanos();
-                Row {
-                    collides: outcome.collides,
-                    probability: if outcome.collides { 1.0 } else { 0.0 },
-                    time_ns,
-                    nodes_visited: outcome.node_pairs_visited,
-                }
-            }
-        })
-        .collect();
+    let rows: Vec<Row> = match &args.mode {
+        Mode::Exact(options) => {
+            let a = CollisionMesh::new(mesh_a);
+            let b = CollisionMesh::new(mesh_b);
+            let mut ws = QueryWorkspace::new();
+            poses
+                .iter()
+                .map(|pose_b| {
+                    let start = Instant::now();
+                    let outcome =
+                        intersects_with(&a, &Pose::IDENTITY, &b, pose_b, options, &mut ws);
+                    let time_ns = start.elapsed().as_nanos();
+                    Row {
+                        collides: outcome.collides,
+                        probability: if outcome.collides { 1.0 } else { 0.0 },
+                        time_ns,
+                        nodes_visited: outcome.node_pairs_visited,
+                    }
+                })
+                .collect()
+        }
+        Mode::Adb { query, resolution } => {
+            let options = AdbBuildOptions {
+                resolution: *resolution,
+                ..Default::default()
+            };
+            let a = AdbTree::build_with(CollisionMesh::new(mesh_a), options);
+            let b = AdbTree::build_with(CollisionMesh::new(mesh_b), options);
+            let mut ws = AdbWorkspace::new();
+            poses
+                .iter()
+                .map(|pose_b| {
+                    let start = Instant::now();
+                    let outcome = adb_intersects(&a, &Pose::IDENTITY, &b, pose_b, query, &mut ws);
+                    let time_ns = start.elapsed().as_nanos();
+                    Row {
+                        collides: outcome.collides,
+                        probability: outcome.probability,
+                        time_ns,
+                        nodes_visited: outcome.node_pairs_visited,
+                    }
+                })
+                .collect()
+        }
+    };
     let write = |out: &mut dyn Write| -> std::io::Result<()> {
         writeln!(out, "index,collides,probability,time_ns,nodes_visited")?;
         for (i, r) in rows.iter().enumerate() {

@@ -27,6 +27,7 @@
 //! Bevy; the engine integration lives in its own layer.
 #![warn(missing_docs)]
 
+pub mod adb;
 pub mod bvh;
 pub mod geometry;
 pub mod mesh;

@@ -66,6 +66,18 @@ impl RelativeFrame {
         !tb.abs().cmpgt(rb).any()
     }
 
+    /// Distance between the two boxes' centres.
+    #[inline]
+    pub(crate) fn center_distance(&self, a: &BvhNode, b: &BvhNode) -> f32 {
+        self.setup(a, b).0.length()
+    }
+
+    /// The second frame's rotation and translation in the first frame.
+    #[inline]
+    pub(crate) fn transform_point(&self, p: Vec3) -> Vec3 {
+        self.rot * p + self.translation
+    }
+
     /// A lower bound on the distance between the boxes (largest gap along the six axes).
     #[inline]
     pub(crate) fn distance_lower_bound(&self, a: &BvhNode, b: &BvhNode) -> f32 {

@@ -15,13 +15,13 @@
 //! a mesh entirely inside another does not touch its surface. For closed meshes,
 //! [`ExactOptions::solid`] adds the containment check.
 
-mod box_test;
+pub(crate) mod box_test;
 mod build;
 mod collision_mesh;
 mod distance;
 mod refit;
 mod solid;
-mod traverse_pair;
+pub(crate) mod traverse_pair;
 mod traverse_self;
 mod tree;
 mod workspace;
@@ -31,7 +31,7 @@ pub use collision_mesh::CollisionMesh;
 pub use distance::{MeshDistance, closest_points};
 pub use solid::contains_point;
 pub use traverse_pair::{
-    ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with,
+    ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with, root_boxes_overlap,
 };
 pub use traverse_self::{self_intersections, self_intersects};
 pub use tree::{Bvh, BvhNode};

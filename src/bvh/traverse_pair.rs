@@ -82,6 +82,19 @@ pub fn intersects_with(
     }
 }
 
+/// Whether the root boxes of `a` and `b` overlap at these poses (oriented-box test, touching
+/// counts): the cheapest necessary condition for a collision, and the papers' criterion for
+/// which queries count in an error rate.
+pub fn root_boxes_overlap(
+    a: &CollisionMesh,
+    pose_a: &Pose,
+    b: &CollisionMesh,
+    pose_b: &Pose,
+) -> bool {
+    let rel = pose_a.inverse_mul(pose_b);
+    RelativeFrame::new(&rel, a.bvh(), b.bvh()).overlap(&a.bvh().nodes()[0], &b.bvh().nodes()[0])
+}
+
 /// All intersecting (or touching) triangle pairs of `a` and `b`, appended to `out` in
 /// traversal order; returns how many were appended.
 pub fn intersecting_pairs(
@@ -107,9 +120,40 @@ fn descend(
     b: &CollisionMesh,
     pose_b: &Pose,
     ws: &mut QueryWorkspace,
+    on_hit: impl FnMut(TrianglePair) -> ControlFlow<()>,
+) {
+    descend_from(a, b, &pose_a.inverse_mul(pose_b), (0, 0), ws, on_hit);
+}
+
+/// Whether the subtree of node `node_a` of `a` and that of `node_b` of `b` contain an
+/// intersecting triangle pair, `rel` placing `b` in `a`'s frame (the ground truth for one
+/// node pair of a probabilistic traversal).
+pub(crate) fn subtrees_intersect(
+    a: &CollisionMesh,
+    b: &CollisionMesh,
+    rel: &Pose,
+    node_a: u32,
+    node_b: u32,
+    ws: &mut QueryWorkspace,
+) -> bool {
+    let mut hit = false;
+    descend_from(a, b, rel, (node_a, node_b), ws, |_| {
+        hit = true;
+        ControlFlow::Break(())
+    });
+    hit
+}
+
+/// [`descend`] from the node pair `start`, with `rel` placing `b` in `a`'s frame.
+fn descend_from(
+    a: &CollisionMesh,
+    b: &CollisionMesh,
+    rel: &Pose,
+    start: (u32, u32),
+    ws: &mut QueryWorkspace,
     mut on_hit: impl FnMut(TrianglePair) -> ControlFlow<()>,
 ) {
-    let rel = pose_a.inverse_mul(pose_b);
+    let rel = *rel;
     let (ta, tb) = (a.bvh(), b.bvh());
     let frame = RelativeFrame::new(&rel, ta, tb);
     let rel64 = rel.to_f64();
@@ -120,10 +164,10 @@ fn descend(
     ws.cache.begin(pos_b.len());
     ws.stack.clear();
     ws.node_pairs_visited = 1;
-    if !frame.overlap(&na[0], &nb[0]) {
+    if !frame.overlap(&na[start.0 as usize], &nb[start.1 as usize]) {
         return;
     }
-    ws.stack.push((0, 0));
+    ws.stack.push(start);
     while let Some((ia, ib)) = ws.stack.pop() {
         let (node_a, node_b) = (&na[ia as usize], &nb[ib as usize]);
         if node_a.is_leaf() && node_b.is_leaf() {

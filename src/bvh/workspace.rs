@@ -38,6 +38,24 @@ impl QueryWorkspace {
         self.node_pairs_visited
     }
 
+    /// Starts a query whose second mesh has `vertex_count` vertices (for callers outside the
+    /// BVH queries that test triangles of a transformed mesh, such as the ADB exact leaves).
+    #[inline]
+    pub(crate) fn cache_begin(&mut self, vertex_count: usize) {
+        self.cache.begin(vertex_count);
+    }
+
+    /// Triangle `tri` of `positions` under `pose`, vertices transformed once per query.
+    #[inline]
+    pub(crate) fn cached_triangle(
+        &mut self,
+        tri: [u32; 3],
+        positions: &[Vec3],
+        pose: &PoseF64,
+    ) -> [DVec3; 3] {
+        self.cache.triangle(tri, positions, pose)
+    }
+
     /// Heap bytes the workspace holds on to (it grows to the largest query seen, then stays).
     pub fn retained_bytes(&self) -> usize {
         use std::mem::size_of;

@@ -1,0 +1,804 @@
+//! What accuracy costs in time: Klein & Zachmann's benchmark for ADB-trees against the exact
+//! query.
+//!
+//! Two copies of a mesh at random orientations approach each other along random directions;
+//! each pose sits at a random offset from first contact (in units of the mesh's size, the
+//! diagonal of its box). Every pose is answered exactly (ground truth, timed) and by ADB-trees
+//! over a sweep of `p_min`, `k_min`, time and node budgets and estimators. Only poses whose root
+//! boxes overlap count (as in the papers).
+//!
+//! ```text
+//! cargo run --release --example accuracy_vs_time -- [--full] [--poses N] [--out DIR] [--meshes a,b,...]
+//! ```
+//!
+//! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
+//! `--full`: every shared mesh and 600 poses each (the README's figures). Writes
+//! `results.csv`, `summary.csv`, `error_vs_time.svg`, `error_vs_distance.svg` and
+//! `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table.
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use plotters::prelude::*;
+use stochastic_collision::adb::{
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, PlanarityEstimator,
+    adb_intersects,
+};
+use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects, root_boxes_overlap};
+use stochastic_collision::geometry::Pose;
+use stochastic_collision::mesh::{TriMesh, generate};
+use stochastic_collision::poses::near_contact_poses;
+
+/// Offsets from first contact are drawn uniformly in ±SPREAD × size.
+const SPREAD: f32 = 0.15;
+/// "Near contact": within 5 % of the size of first contact.
+const NEAR: f32 = 0.05;
+const DISTANCE_BINS: usize = 10;
+
+struct Settings {
+    full: bool,
+    poses: usize,
+    out: PathBuf,
+    meshes: Option<Vec<String>>,
+    build: AdbBuildOptions,
+}
+
+fn parse_args() -> Result<Settings, String> {
+    let mut s = Settings {
+        full: false,
+        poses: 0,
+        out: PathBuf::from("target/accuracy_vs_time"),
+        meshes: None,
+        build: AdbBuildOptions::default(),
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        match flag.as_str() {
+            "--full" => s.full = true,
+            "--poses" => {
+                s.poses = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|&n: &usize| n > 0)
+                    .ok_or("--poses needs a positive number")?
+            }
+            "--out" => s.out = PathBuf::from(it.next().ok_or("--out needs a directory")?),
+            "--meshes" => {
+                s.meshes = Some(
+                    it.next()
+                        .ok_or("--meshes needs a list")?
+                        .split(',')
+                        .map(str::to_string)
+                        .collect(),
+                )
+            }
+            "--resolution" => {
+                s.build.resolution = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|r| (1..=8).contains(r))
+                    .ok_or("--resolution needs a number in 1..=8")?
+            }
+            "--fill" => {
+                s.build.fill_fraction = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|f: &f32| *f > 0.0 && *f <= 1.0)
+                    .ok_or("--fill needs a number in (0, 1]")?
+            }
+            other => {
+                return Err(format!(
+                    "unknown argument `{other}` (known: --full, --poses N, --out DIR, --meshes a,b, --resolution R, --fill F)"
+                ));
+            }
+        }
+    }
+    if s.poses == 0 {
+        s.poses = if s.full { 600 } else { 150 };
+    }
+    Ok(s)
+}
+
+/// One ADB configuration of the sweep.
+struct Config {
+    label: String,
+    /// Which curve of the error-vs-time plot it belongs to.
+    family: &'static str,
+    query: AdbQuery,
+}
+
+/// The sweep: the papers' method as published, and the calibrated default over `p_min`,
+/// `k_min`, pruning and budgets.
+fn configs() -> Vec<Config> {
+    let mut out = Vec::new();
+    let paper = |p_min: f64, k_min: u32| AdbQuery {
+        p_min,
+        k_min,
+        ..AdbQuery::paper()
+    };
+    let tuned = |p_min: f64, k_min: u32, p_prune: f64, budget: Budget| AdbQuery {
+        p_min,
+        k_min,
+        budget,
+        p_prune,
+        ..AdbQuery::default()
+    };
+    for (p, k) in [(0.9, 1), (0.99, 1), (0.99, 5), (0.99, 10), (0.999, 10)] {
+        out.push(Config {
+            label: format!("paper p{p} k{k}"),
+            family: "paper",
+            query: paper(p, k),
+        });
+    }
+    for (p, k, prune) in [
+        (0.9, 1, 0.0),
+        (0.99, 1, 0.0),
+        (0.99, 3, 0.0),
+        (0.99, 10, 0.0),
+        (0.999, 10, 0.0),
+        (0.99, 10, 0.01),
+        (0.99, 10, 0.05),
+    ] {
+        let label = if prune > 0.0 {
+            format!("calibrated p{p} k{k} prune{prune}")
+        } else {
+            format!("calibrated p{p} k{k}")
+        };
+        out.push(Config {
+            label,
+            family: "calibrated",
+            query: tuned(p, k, prune, Budget::Unlimited),
+        });
+    }
+    for us in [5u64, 10, 20, 50, 100] {
+        out.push(Config {
+            label: format!("calibrated p0.99 k10 {us}us"),
+            family: "time budget",
+            query: tuned(0.99, 10, 0.0, Budget::Time(Duration::from_micros(us))),
+        });
+    }
+    for n in [100u64, 300, 1000] {
+        out.push(Config {
+            label: format!("calibrated p0.99 k10 {n}nodes"),
+            family: "node budget",
+            query: tuned(0.99, 10, 0.0, Budget::NodePairs(n)),
+        });
+    }
+    out.push(Config {
+        label: "planarity p0.99 k10".into(),
+        family: "estimator",
+        query: AdbQuery {
+            estimator: Arc::new(PlanarityEstimator::default()),
+            decision: Decision::Confidence,
+            ..AdbQuery::default()
+        },
+    });
+    out.push(Config {
+        label: "calibrated p0.99 k10 exact-leaves".into(),
+        family: "estimator",
+        query: AdbQuery {
+            exact_leaves: true,
+            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
+        },
+    });
+    out
+}
+
+/// The default configuration, whose error the targets are about.
+const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
+const PAPER_LABEL: &str = "paper p0.99 k10";
+const BUDGET_20_LABEL: &str = "calibrated p0.99 k10 20us";
+
+fn meshes(settings: &Settings) -> Vec<(String, TriMesh)> {
+    let shared_dir = std::env::var_os("STOCHASTIC_COLLISION_MESHES")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes")
+        });
+    let mut names: Vec<&str> = vec!["icosphere_20k", "torus_32k", "bunny"];
+    if settings.full {
+        names = vec![
+            "icosphere_20k",
+            "torus_32k",
+            "bunny",
+            "armadillo",
+            "dragon_50k",
+            "stanford-bunny",
+            "small_intestine_100k",
+            "ogre",
+        ];
+    }
+    let wanted: Vec<String> = match &settings.meshes {
+        Some(list) => list.clone(),
+        None => names.iter().map(|s| s.to_string()).collect(),
+    };
+    let mut out = Vec::new();
+    for name in wanted {
+        let mesh = match name.as_str() {
+            "icosphere_20k" => Ok(generate::icosphere(1.0, 5)),
+            "torus_32k" => Ok(generate::torus(1.0, 0.3, 256, 64)),
+            other => TriMesh::from_obj(shared_dir.join(format!("{other}.obj"))),
+        };
+        match mesh {
+            Ok(m) => out.push((name, m)),
+            Err(e) => eprintln!("note: skipping {name}: {e}"),
+        }
+    }
+    out
+}
+
+/// One query's result.
+#[derive(Clone, Copy)]
+struct Answer {
+    collides: bool,
+    probability: f64,
+    time_ns: f64,
+    nodes: u64,
+}
+
+struct PoseRecord {
+    offset: f32,
+    exact: Answer,
+    adb: Vec<Answer>,
+}
+
+fn progress_bar(label: &str, done: usize, total: usize) {
+    let width = 30;
+    let filled = done * width / total.max(1);
+    eprint!(
+        "\r  {label:<28} [{}{}] {:>3}%",
+        "#".repeat(filled),
+        " ".repeat(width - filled),
+        done * 100 / total.max(1)
+    );
+    if done >= total {
+        eprintln!();
+    }
+}
+
+fn run_mesh(
+    name: &str,
+    mesh: TriMesh,
+    poses: usize,
+    build: AdbBuildOptions,
+) -> (Vec<PoseRecord>, f64) {
+    let cm = CollisionMesh::new(mesh);
+    let total_nodes = cm.bvh().nodes().len();
+    let start = Instant::now();
+    let shown = std::sync::atomic::AtomicUsize::new(0);
+    let tree = AdbTree::build_with_progress(cm, build, &|p| {
+        // Redraw about every 2 %.
+        let step = (p.nodes_total / 50).max(1);
+        let last = shown.load(std::sync::atomic::Ordering::Relaxed);
+        if p.nodes_done >= last + step || p.nodes_done == p.nodes_total {
+            shown.store(p.nodes_done, std::sync::atomic::Ordering::Relaxed);
+            progress_bar(&format!("{name}: ADB build"), p.nodes_done, p.nodes_total);
+        }
+    });
+    let build_s = start.elapsed().as_secs_f64();
+    let tris = tree.collision_mesh().mesh().triangle_count();
+    eprintln!(
+        "  {name}: {tris} triangles, {total_nodes} nodes, ADB build {:.2} s ({:.0} k triangles/s)",
+        build_s,
+        tris as f64 / build_s / 1e3
+    );
+    let configs = configs();
+    let cm = tree.collision_mesh();
+    // Evaluation poses: a different seed from the fit's training poses.
+    let approach = near_contact_poses(cm, cm, poses, SPREAD, 0xACC0);
+    let mut exact_ws = QueryWorkspace::new();
+    let mut adb_ws = AdbWorkspace::new();
+    let mut records = Vec::with_capacity(approach.len());
+    for (i, p) in approach.iter().enumerate() {
+        let t = Instant::now();
+        let hit = intersects(cm, &Pose::IDENTITY, cm, &p.pose, &mut exact_ws);
+        let exact = Answer {
+            collides: hit,
+            probability: if hit { 1.0 } else { 0.0 },
+            time_ns: t.elapsed().as_nanos() as f64,
+            nodes: exact_ws.node_pairs_visited(),
+        };
+        let adb = configs
+            .iter()
+            .map(|c| {
+                let t = Instant::now();
+                let o = adb_intersects(
+                    &tree,
+                    &Pose::IDENTITY,
+                    &tree,
+                    &p.pose,
+                    &c.query,
+                    &mut adb_ws,
+                );
+                Answer {
+                    collides: o.collides,
+                    probability: o.probability,
+                    time_ns: t.elapsed().as_nanos() as f64,
+                    nodes: o.node_pairs_visited,
+                }
+            })
+            .collect();
+        // Only poses whose root boxes overlap count, as in the papers.
+        let root_overlap = root_boxes_overlap(cm, &Pose::IDENTITY, cm, &p.pose);
+        if root_overlap {
+            records.push(PoseRecord {
+                offset: p.offset / p.size,
+                exact,
+                adb,
+            });
+        }
+        if (i + 1) % 25 == 0 || i + 1 == approach.len() {
+            progress_bar(&format!("{name}: queries"), i + 1, approach.len());
+        }
+    }
+    (records, build_s)
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[v.len() / 2]
+}
+
+fn percentile(v: &mut [f64], q: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    v[((v.len() - 1) as f64 * q).round() as usize]
+}
+
+/// Error statistics of one configuration on one mesh.
+struct Stats {
+    median_us: f64,
+    p99_us: f64,
+    error: f64,
+    false_pos: f64,
+    false_neg: f64,
+    near_error: f64,
+    brier: f64,
+    budget_kept: f64,
+}
+
+fn stats(records: &[PoseRecord], pick: impl Fn(&PoseRecord) -> Answer) -> Stats {
+    let n = records.len().max(1) as f64;
+    let mut times: Vec<f64> = records.iter().map(|r| pick(r).time_ns / 1e3).collect();
+    let wrong = |r: &PoseRecord| pick(r).collides != r.exact.collides;
+    let near: Vec<&PoseRecord> = records.iter().filter(|r| r.offset.abs() <= NEAR).collect();
+    Stats {
+        median_us: median(&mut times.clone()),
+        p99_us: percentile(&mut times, 0.99),
+        error: 100.0 * records.iter().filter(|r| wrong(r)).count() as f64 / n,
+        false_pos: 100.0
+            * records
+                .iter()
+                .filter(|r| pick(r).collides && !r.exact.collides)
+                .count() as f64
+            / n,
+        false_neg: 100.0
+            * records
+                .iter()
+                .filter(|r| !pick(r).collides && r.exact.collides)
+                .count() as f64
+            / n,
+        near_error: 100.0 * near.iter().filter(|r| wrong(r)).count() as f64
+            / near.len().max(1) as f64,
+        brier: records
+            .iter()
+            .map(|r| (pick(r).probability - f64::from(u8::from(r.exact.collides))).powi(2))
+            .sum::<f64>()
+            / n,
+        budget_kept: 0.0,
+    }
+}
+
+fn main() {
+    let settings = match parse_args() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::exit(2);
+        }
+    };
+    if let Err(e) = std::fs::create_dir_all(&settings.out) {
+        eprintln!("error: cannot create {}: {e}", settings.out.display());
+        std::process::exit(2);
+    }
+    let configs = configs();
+    let mut all: BTreeMap<String, Vec<PoseRecord>> = BTreeMap::new();
+    let mut order = Vec::new();
+    for (name, mesh) in meshes(&settings) {
+        let (records, _) = run_mesh(&name, mesh, settings.poses, settings.build);
+        order.push(name.clone());
+        all.insert(name, records);
+    }
+    if all.is_empty() {
+        eprintln!("error: no meshes");
+        std::process::exit(2);
+    }
+    if let Err(e) = write_outputs(&settings, &configs, &order, &all) {
+        eprintln!("error: cannot write the report: {e}");
+        std::process::exit(2);
+    }
+}
+
+fn write_outputs(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    // Raw results.
+    let mut csv = std::io::BufWriter::new(std::fs::File::create(settings.out.join("results.csv"))?);
+    writeln!(
+        csv,
+        "mesh,config,offset,exact,collides,probability,time_ns,nodes_visited"
+    )?;
+    for name in order {
+        for r in &all[name] {
+            let e = r.exact;
+            writeln!(
+                csv,
+                "{name},exact,{},{},{},{},{},{}",
+                r.offset,
+                u8::from(e.collides),
+                u8::from(e.collides),
+                e.probability,
+                e.time_ns,
+                e.nodes
+            )?;
+            for (c, a) in configs.iter().zip(&r.adb) {
+                writeln!(
+                    csv,
+                    "{name},{},{},{},{},{:.6},{},{}",
+                    c.label,
+                    r.offset,
+                    u8::from(e.collides),
+                    u8::from(a.collides),
+                    a.probability,
+                    a.time_ns,
+                    a.nodes
+                )?;
+            }
+        }
+    }
+    csv.flush()?;
+
+    // Summary table.
+    let mut summary =
+        std::io::BufWriter::new(std::fs::File::create(settings.out.join("summary.csv"))?);
+    writeln!(
+        summary,
+        "mesh,config,median_us,p99_us,ratio_to_exact,error_pct,false_pos_pct,false_neg_pct,near_error_pct,brier,budget_kept_pct"
+    )?;
+    let mut table = String::new();
+    writeln!(
+        table,
+        "| mesh | config | median µs | p99 µs | × exact | error % | FP % | FN % | error % near | Brier |"
+    )?;
+    writeln!(table, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    for name in order {
+        let records = &all[name];
+        let exact = stats(records, |r| r.exact);
+        let tris_note = format!("{name} ({} poses)", records.len());
+        writeln!(
+            table,
+            "| {tris_note} | exact | {:.1} | {:.1} | 1.00 | 0 | 0 | 0 | 0 | 0 |",
+            exact.median_us, exact.p99_us
+        )?;
+        writeln!(
+            summary,
+            "{name},exact,{:.3},{:.3},1,0,0,0,0,0,100",
+            exact.median_us, exact.p99_us
+        )?;
+        for (k, c) in configs.iter().enumerate() {
+            let mut s = stats(records, |r| r.adb[k]);
+            if let Budget::Time(t) = c.query.budget {
+                let limit = t.as_nanos() as f64 * 1.5;
+                s.budget_kept = 100.0
+                    * records.iter().filter(|r| r.adb[k].time_ns <= limit).count() as f64
+                    / records.len().max(1) as f64;
+            }
+            writeln!(
+                summary,
+                "{name},{},{:.3},{:.3},{:.4},{:.3},{:.3},{:.3},{:.3},{:.5},{:.1}",
+                c.label,
+                s.median_us,
+                s.p99_us,
+                s.median_us / exact.median_us,
+                s.error,
+                s.false_pos,
+                s.false_neg,
+                s.near_error,
+                s.brier,
+                s.budget_kept
+            )?;
+            if c.label == DEFAULT_LABEL
+                || c.label == BUDGET_20_LABEL
+                || c.family == "estimator"
+                || settings.full
+            {
+                writeln!(
+                    table,
+                    "| {tris_note} | {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} |",
+                    c.label,
+                    s.median_us,
+                    s.p99_us,
+                    s.median_us / exact.median_us,
+                    s.error,
+                    s.false_pos,
+                    s.false_neg,
+                    s.near_error,
+                    s.brier
+                )?;
+            }
+        }
+    }
+    summary.flush()?;
+    println!("\n{table}");
+
+    plot_error_vs_time(settings, configs, order, all)?;
+    plot_error_vs_distance(settings, configs, order, all)?;
+    plot_reliability(settings, configs, order, all)?;
+    println!(
+        "wrote results.csv, summary.csv, error_vs_time.svg, error_vs_distance.svg, reliability.svg to {}",
+        settings.out.display()
+    );
+    Ok(())
+}
+
+fn palette(i: usize) -> RGBColor {
+    const C: [RGBColor; 8] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(23, 190, 207),
+    ];
+    C[i % C.len()]
+}
+
+/// Error % against median query time: one curve per mesh over the p_min/k_min and time-budget
+/// sweeps, the exact query as a point at 0 % error.
+fn plot_error_vs_time(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let path = settings.out.join("error_vs_time.svg");
+    let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut curves = Vec::new();
+    let (mut tmax, mut emax) = (1.0f64, 5.0f64);
+    for name in order {
+        let records = &all[name];
+        let exact = stats(records, |r| r.exact);
+        let mut pts: Vec<(f64, f64)> = configs
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.family == "calibrated" || c.family == "time budget")
+            .map(|(k, _)| {
+                let s = stats(records, |r| r.adb[k]);
+                (s.median_us, s.error)
+            })
+            .collect();
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        tmax = tmax
+            .max(exact.median_us)
+            .max(pts.iter().map(|p| p.0).fold(0.0, f64::max));
+        emax = emax.max(pts.iter().map(|p| p.1).fold(0.0, f64::max));
+        curves.push((name.clone(), pts, exact.median_us));
+    }
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "ADB error vs median query time (near-contact poses)",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d((0.5f64..tmax * 1.3).log_scale(), 0.0f64..emax * 1.1)?;
+    chart
+        .configure_mesh()
+        .x_desc("median query time (µs, log)")
+        .y_desc("error (%)")
+        .draw()?;
+    for (i, (name, pts, exact_us)) in curves.into_iter().enumerate() {
+        let color = palette(i);
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+            .label(name)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+            });
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+        chart.draw_series(std::iter::once(TriangleMarker::new(
+            (exact_us, 0.0),
+            6,
+            color.filled(),
+        )))?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// Error % of the default configuration against the offset from first contact.
+fn plot_error_vs_distance(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let k = configs
+        .iter()
+        .position(|c| c.label == DEFAULT_LABEL)
+        .expect("default config");
+    let path = settings.out.join("error_vs_distance.svg");
+    let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let width = 2.0 * SPREAD / DISTANCE_BINS as f32;
+    let mut curves = Vec::new();
+    let mut emax = 5.0f64;
+    for name in order {
+        let mut bins = [(0usize, 0usize); DISTANCE_BINS];
+        for r in &all[name] {
+            let b = (((r.offset + SPREAD) / width) as usize).min(DISTANCE_BINS - 1);
+            bins[b].0 += 1;
+            bins[b].1 += usize::from(r.adb[k].collides != r.exact.collides);
+        }
+        let pts: Vec<(f64, f64)> = bins
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.0 > 0)
+            .map(|(i, b)| {
+                (
+                    f64::from(-SPREAD + width * (i as f32 + 0.5)),
+                    100.0 * b.1 as f64 / b.0 as f64,
+                )
+            })
+            .collect();
+        emax = emax.max(pts.iter().map(|p| p.1).fold(0.0, f64::max));
+        curves.push((name.clone(), pts));
+    }
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!("ADB error vs distance from first contact ({DEFAULT_LABEL})"),
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(f64::from(-SPREAD)..f64::from(SPREAD), 0.0f64..emax * 1.1)?;
+    chart
+        .configure_mesh()
+        .x_desc("offset from first contact (fraction of size; < 0 overlapping)")
+        .y_desc("error (%)")
+        .draw()?;
+    for (i, (name, pts)) in curves.into_iter().enumerate() {
+        let color = palette(i);
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+            .label(name)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+            });
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+/// Reliability curve: observed collision frequency against reported probability (10 bins),
+/// over all meshes, for the default and the 20 µs configurations.
+fn plot_reliability(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let path = settings.out.join("reliability.svg");
+    let root = SVGBackend::new(&path, (700, 620)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Reliability of the reported probability",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0f64..1.0, 0.0f64..1.0)?;
+    chart
+        .configure_mesh()
+        .x_desc("reported probability")
+        .y_desc("observed collision frequency")
+        .draw()?;
+    chart.draw_series(LineSeries::new(
+        vec![(0.0, 0.0), (1.0, 1.0)],
+        BLACK.mix(0.4),
+    ))?;
+    println!("reliability (all meshes): reported probability bin -> observed frequency (queries)");
+    for (i, label) in [DEFAULT_LABEL, BUDGET_20_LABEL, PAPER_LABEL]
+        .into_iter()
+        .enumerate()
+    {
+        let k = configs
+            .iter()
+            .position(|c| c.label == label)
+            .expect("config");
+        let mut bins = [(0usize, 0usize, 0.0f64); 10];
+        let mut brier = (0.0, 0usize);
+        for name in order {
+            for r in &all[name] {
+                let p = r.adb[k].probability;
+                let b = ((p * 10.0) as usize).min(9);
+                bins[b].0 += 1;
+                bins[b].1 += usize::from(r.exact.collides);
+                bins[b].2 += p;
+                brier.0 += (p - f64::from(u8::from(r.exact.collides))).powi(2);
+                brier.1 += 1;
+            }
+        }
+        let pts: Vec<(f64, f64)> = bins
+            .iter()
+            .filter(|b| b.0 > 0)
+            .map(|b| (b.2 / b.0 as f64, b.1 as f64 / b.0 as f64))
+            .collect();
+        let line: Vec<String> = bins
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| b.0 > 0)
+            .map(|(j, b)| {
+                format!(
+                    "[{:.1},{:.1}): {:.2} ({})",
+                    j as f64 / 10.0,
+                    (j + 1) as f64 / 10.0,
+                    b.1 as f64 / b.0 as f64,
+                    b.0
+                )
+            })
+            .collect();
+        println!(
+            "  {label}: Brier {:.4}; {}",
+            brier.0 / brier.1.max(1) as f64,
+            line.join(", ")
+        );
+        let color = palette(i);
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+            .label(format!(
+                "{label} (Brier {:.3})",
+                brier.0 / brier.1.max(1) as f64
+            ))
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+            });
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}

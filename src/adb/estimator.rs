@@ -1,0 +1,142 @@
+//! Pluggable estimators of the probability that two nodes contain intersecting triangles.
+use super::fit::Calibration;
+use super::probability::{cell_counts, depth_lower_bound, overlap_volume};
+use super::tables::collision_probability_tabled;
+use super::tree::AdbNode;
+
+/// Everything an estimator may use about one pair of overlapping nodes.
+#[derive(Debug, Clone, Copy)]
+pub struct NodePair<'a> {
+    /// The first tree's node.
+    pub a: &'a AdbNode,
+    /// The second tree's node.
+    pub b: &'a AdbNode,
+    /// Maximum depth of the first tree.
+    pub max_depth_a: u32,
+    /// Maximum depth of the second tree.
+    pub max_depth_b: u32,
+    /// Distance between the two boxes' centres.
+    pub center_distance: f32,
+    /// Cells per node of the first tree's grids.
+    pub cells_a: u32,
+    /// Cells per node of the second tree's grids.
+    pub cells_b: u32,
+    /// The first tree's fitted calibration, if it has one.
+    pub calibration_a: Option<&'a Calibration>,
+    /// The second tree's fitted calibration, if it has one.
+    pub calibration_b: Option<&'a Calibration>,
+}
+
+/// Estimates the probability that two overlapping nodes contain intersecting triangles.
+///
+/// Implementations must be deterministic and return a value in `[0, 1]`. The traversal calls
+/// this once per overlapping node pair, so it should cost tens of nanoseconds.
+pub trait CollisionEstimator: Send + Sync + std::fmt::Debug {
+    /// The probability for this pair.
+    fn probability(&self, pair: &NodePair<'_>) -> f64;
+    /// A short name for reports.
+    fn name(&self) -> &'static str;
+}
+
+/// The papers' estimate: overlap volume → `s, s_A, s_B` → Eq. 8 → Eq. 9 with the curvature term
+/// `LB = (d_A + d_B) / (d_maxA + d_maxB)` and `x ≤ x_max`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PaperEstimator {
+    /// Cap on the number of collision cells `x` in Eq. 9 (the papers: 10).
+    pub x_max: u32,
+}
+
+impl Default for PaperEstimator {
+    fn default() -> Self {
+        Self { x_max: 10 }
+    }
+}
+
+/// Beyond the papers: the curvature term from the mesh itself. Each node stores how flat its
+/// surface is ([`AdbNode::planarity`]); `LB` is the geometric mean of the two planarities, so
+/// flat patches deep or shallow in the tree count as likely to intersect and curved ones do not,
+/// whatever their depth. Everything else as [`PaperEstimator`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanarityEstimator {
+    /// Cap on the number of collision cells `x` in Eq. 9.
+    pub x_max: u32,
+}
+
+impl Default for PlanarityEstimator {
+    fn default() -> Self {
+        Self { x_max: 10 }
+    }
+}
+
+/// Eq. 9 for this pair with the given curvature term.
+#[inline]
+pub fn eq9_probability(pair: &NodePair<'_>, lb: f64, x_max: u32) -> f64 {
+    let (a, b) = (pair.a, pair.b);
+    let volume = |s: &[f32; 3]| f64::from(s[0]) * f64::from(s[1]) * f64::from(s[2]);
+    let v = overlap_volume(a.sides, b.sides, pair.center_distance);
+    let cells = pair.cells_a.max(pair.cells_b);
+    let counts = cell_counts(
+        v,
+        volume(&a.sides),
+        volume(&b.sides),
+        u32::from(a.well_filled),
+        u32::from(b.well_filled),
+        cells,
+    );
+    collision_probability_tabled(counts, lb, x_max)
+}
+
+impl CollisionEstimator for PaperEstimator {
+    #[inline]
+    fn probability(&self, pair: &NodePair<'_>) -> f64 {
+        let lb = depth_lower_bound(
+            u32::from(pair.a.depth),
+            u32::from(pair.b.depth),
+            pair.max_depth_a,
+            pair.max_depth_b,
+        );
+        eq9_probability(pair, lb, self.x_max)
+    }
+
+    fn name(&self) -> &'static str {
+        "paper"
+    }
+}
+
+impl CollisionEstimator for PlanarityEstimator {
+    #[inline]
+    fn probability(&self, pair: &NodePair<'_>) -> f64 {
+        let lb = (f64::from(pair.a.planarity) * f64::from(pair.b.planarity)).sqrt();
+        eq9_probability(pair, lb, self.x_max)
+    }
+
+    fn name(&self) -> &'static str {
+        "planarity"
+    }
+}
+
+/// The recommended estimator: [`PlanarityEstimator`]'s raw value mapped through the
+/// calibrations each [`AdbTree`](super::AdbTree) fits on its own mesh at build time
+/// ([`AdbBuildOptions::fit`](super::AdbBuildOptions::fit)); the mean of the two trees'
+/// calibrated values, or the raw value for a tree built without one.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CalibratedEstimator {
+    /// The raw estimate.
+    pub base: PlanarityEstimator,
+}
+
+impl CollisionEstimator for CalibratedEstimator {
+    #[inline]
+    fn probability(&self, pair: &NodePair<'_>) -> f64 {
+        let raw = self.base.probability(pair);
+        match (pair.calibration_a, pair.calibration_b) {
+            (Some(a), Some(b)) => 0.5 * (a.map(pair, raw) + b.map(pair, raw)),
+            (Some(c), None) | (None, Some(c)) => c.map(pair, raw),
+            (None, None) => raw,
+        }
+    }
+
+    fn name(&self) -> &'static str {
+        "calibrated"
+    }
+}

@@ -1,0 +1,33 @@
+//! ADB-trees (Klein & Zachmann 2003): time-critical, probability-guided mesh–mesh collision
+//! queries that trade accuracy for time, on purpose and measurably.
+//!
+//! - [`AdbTree`]: a [`CollisionMesh`](crate::bvh::CollisionMesh)'s BVH whose nodes also store
+//!   the number of "well-filled" cells of a grid over the node ([`cells`]), the node's depth and
+//!   shape data.
+//! - [`probability`] and [`tables`]: the overlap-volume estimate, the runtime numbers
+//!   `s, s_A, s_B`, Eq. 8 (hypergeometric tail) and Eq. 9 (curvature term), computed stably,
+//!   with lookup tables built once per process.
+//! - [`CollisionEstimator`]: the pluggable probability model ([`PaperEstimator`], and
+//!   [`PlanarityEstimator`] whose curvature term comes from the mesh).
+//! - [`adb_intersects`]: the priority-queue traversal with `p_min`, `k_min`, budgets (node pairs
+//!   or time) and optional exact leaves; its [`AdbOutcome`] says whether the meshes collide,
+//!   with what confidence, whether the budget ran out, and where the contact probably is.
+
+pub mod cells;
+mod estimator;
+mod fit;
+pub mod probability;
+pub mod tables;
+mod traverse;
+mod tree;
+
+pub use estimator::{
+    CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator, PlanarityEstimator,
+    eq9_probability,
+};
+pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
+pub use traverse::{
+    AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, MAX_ESTIMATE,
+    TIME_CHECK_INTERVAL, adb_intersects,
+};
+pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};

@@ -1,0 +1,721 @@
+//! The ADB-tree probability model (Klein & Zachmann 2003), computed stably.
+//!
+//! One node pair `(A, B)` of two ADB-trees is scored in four steps:
+//!
+//! 1. [`overlap_volume`]: an estimate `V̂` of `Vol(A ∩ B)` from the two boxes' side lengths and
+//!    the distance of their centres (the paper's `max{V1, V2, V3}` for boxes of similar size,
+//!    the bounding spheres' lens otherwise).
+//! 2. [`cell_counts`]: the three integers of the balls-in-bins model: `s` cells in `A ∩ B`, of
+//!    which `s_A` are possible collision cells of `A` and `s_B` of `B`.
+//! 3. [`prob_at_least`] (Eq. 8): `Pr[c(A∩B) ≥ x]`, the hypergeometric upper tail.
+//! 4. [`collision_probability`] (Eq. 9): `max_x Pr[c ≥ x] · (1 − (1 − LB)^x)`, with the
+//!    curvature term `LB` from a [`CurvatureBound`] ([`DepthRatio`] is the paper's).
+//!
+//! For the traversal's hot path use
+//! [`collision_probability_tabled`](super::tables::collision_probability_tabled), which reads
+//! Eq. 8 from a precomputed table and falls back to the functions here.
+//!
+//! # Numerics
+//!
+//! No binomial coefficient is ever formed. The hypergeometric terms come from their ratio
+//! recurrence, anchored either at the first term of the support (computed in log space from
+//! [`ln_factorial`]) when the head `Σ_{t<x} P(t)` is at most ½, so that `1 − head` loses
+//! nothing, or at the mode (weight 1, normalised by the sum of all non-negligible terms) when
+//! the tail is small, so that small tails keep their relative accuracy. Every result is finite
+//! and in `[0, 1]` for every input, including `s` in the hundreds of thousands.
+//!
+//! The reconstruction choices (the papers do not give them) are marked *\[RECON\]*.
+
+use std::f64::consts::PI;
+use std::sync::LazyLock;
+
+/// Largest ratio between the two (thickened) box volumes for which [`overlap_volume`] still
+/// uses the box formula; above it, it uses the bounding spheres' lens. *\[RECON\]*: the papers
+/// say only "if the boxes differ in size by more than a threshold".
+///
+/// The value 4 (about 1.6× in each side for similar shapes) balances the two formulas' errors.
+/// The box formula assumes equal boxes: when a smaller box sits inside a larger one it
+/// underestimates the overlap (it starts decreasing at `d = 0`, while the true overlap stays
+/// the small box's volume until `d ≈ (a_B − a_A)/2`); at a side ratio of 1.6 that error is
+/// at most about 30%. The sphere lens overestimates for boxes of similar size (a cube's
+/// bounding sphere is 2.7× its volume, and two face-touching cubes still get a large lens), so
+/// switching to it early costs more than it saves. Sibling nodes of a binary BVH differ by
+/// about 2× in volume per level, so 4 also keeps node pairs one level apart on the box formula.
+pub const SIZE_RATIO_THRESHOLD: f64 = 4.0;
+
+/// Each side of a node box is taken as at least this fraction of its longest side in
+/// [`overlap_volume`] and [`node_volume`]. *\[RECON\]*: flat nodes (a planar patch has a zero
+/// side) otherwise have zero volume, so every overlap estimate and every cell count would be 0
+/// and flat geometry could never be reported.
+///
+/// 0.25 makes a flat node one cell layer thick on the default 4×4×4 grid
+/// ([`S_MAX`](super::tables::S_MAX) = 64 cells): a flat node crossing a full node then covers
+/// about `n²` of its `n³` cells, which is what a plane crossing a grid does. For two flat nodes
+/// the cell count does not depend on this value at all (it cancels in `V̂ / v`).
+pub const MIN_SIDE_RATIO: f64 = 0.25;
+
+/// The cap on the number `x` of collision cells in Eq. 9 used by the papers ("in practice the
+/// maximum is reached at small `x`", S1 §6.4).
+pub const DEFAULT_X_MAX: u32 = 10;
+
+/// Relative size below which the remaining hypergeometric terms are dropped (`2^-60`).
+const TRUNC_EPS: f64 = 8.673_617_379_884_035e-19;
+
+/// Terms below this, relative to the mode's weight 1, are flushed to 0 by the streaming
+/// evaluation. Carrying them would push the weights into subnormals, where the ratio recurrence
+/// stalls (a subnormal times 1.3 can round back to itself) and corrupts the sums. Their total is
+/// below `2^32 · 10⁻²⁸⁰`, so only probabilities under about `10⁻²⁷⁰` are affected (returned as
+/// 0).
+const WEIGHT_FLOOR: f64 = 1e-280;
+
+/// The head path scales by `P(lo)` only when `ln P(lo)` is above this (`P(lo) > 10⁻²⁶⁰`), far
+/// from subnormals.
+const HEAD_MIN_LN: f64 = -600.0;
+
+/// A head below `e^-700 ≈ 10⁻³⁰⁴` leaves every tail at exactly 1 in `f64`.
+const HEAD_NEGLIGIBLE_LN: f64 = -700.0;
+
+/// Up to this many `x` values are evaluated in a stack buffer; more go through the streaming
+/// path.
+const STACK_X: usize = 64;
+
+// ---------------------------------------------------------------------------------------------
+// Volumes
+// ---------------------------------------------------------------------------------------------
+
+/// Sides as `f64`, sorted longest first; NaN and non-positive sides become 0.
+fn sorted_sides(sides: [f32; 3]) -> [f64; 3] {
+    let mut v = sides.map(|x| if x > 0.0 { f64::from(x) } else { 0.0 });
+    v.sort_unstable_by(|a, b| b.total_cmp(a));
+    v
+}
+
+/// Sorted sides with every side raised to at least [`MIN_SIDE_RATIO`] × the longest.
+fn thickened_sides(sides: [f32; 3]) -> [f64; 3] {
+    let [a, b, c] = sorted_sides(sides);
+    let min = MIN_SIDE_RATIO * a;
+    [a, b.max(min), c.max(min)]
+}
+
+/// Distance as a non-negative `f64`; `None` for NaN.
+fn sanitize_distance(d: f64) -> Option<f64> {
+    if d.is_nan() { None } else { Some(d.abs()) }
+}
+
+/// `max{V1, V2, V3}` on already sorted, sanitised sides (longest first) of both boxes.
+fn box_overlap_sorted(a_sides: [f64; 3], b_sides: [f64; 3], d: f64) -> f64 {
+    let a = a_sides[0].min(b_sides[0]);
+    let b = a_sides[1].min(b_sides[1]);
+    let c = a_sides[2].min(b_sides[2]);
+    let vol = a * b * c;
+    let Some(d) = sanitize_distance(d) else {
+        return 0.0;
+    };
+    if vol.is_nan() || vol <= 0.0 {
+        return 0.0;
+    }
+    let l2 = a.hypot(b);
+    let l3 = l2.hypot(c);
+    // Each base is clamped at 0 before the power: otherwise (1 − d/L)² turns positive again.
+    let b1 = (1.0 - d / a).max(0.0);
+    let b2 = (1.0 - d / l2).max(0.0);
+    let b3 = (1.0 - d / l3).max(0.0);
+    let v = vol * b1.max(b2 * b2).max(b3 * b3 * b3);
+    if v.is_nan() { 0.0 } else { v.min(vol) }
+}
+
+/// Klein & Zachmann's overlap-volume estimate for two boxes of nearly equal size (S1 §6.5):
+/// `max{V1, V2, V3}` with
+///
+/// ```text
+/// V1 = abc·(1 − d/a),  V2 = abc·(1 − d/√(a²+b²))²,  V3 = abc·(1 − d/√(a²+b²+c²))³
+/// ```
+///
+/// where `d` is the distance of the box centres (any relative orientation), and each base is
+/// clamped at 0 before the power (unclamped, `V2` becomes positive again for large `d`).
+///
+/// `a ≥ b ≥ c` are the **elementwise minimum of the two boxes' sorted sides** *\[RECON\]*: the
+/// paper states the formula for equal boxes. This choice is symmetric in `A` and `B`,
+/// continuous in the inputs (taking "the smaller box" jumps when the volumes cross), equals the
+/// paper's for equal boxes, and `abc` is exactly the intersection of the two boxes when they are
+/// centred and aligned with matching axes, which is the largest intersection of any aligned
+/// configuration. The result never exceeds the smaller box's volume.
+///
+/// Raw formula: a box with a zero side gives 0 (see [`overlap_volume`] for flat nodes); NaN
+/// sides count as 0, a negative `d` as `|d|`, a NaN `d` gives 0. Never NaN.
+pub fn box_overlap_volume(sides_a: [f32; 3], sides_b: [f32; 3], d: f32) -> f64 {
+    box_overlap_sorted(sorted_sides(sides_a), sorted_sides(sides_b), f64::from(d))
+}
+
+/// Volume of a ball of radius `r`.
+fn ball_volume(r: f64) -> f64 {
+    4.0 / 3.0 * PI * r * r * r
+}
+
+/// Volume of the intersection (lens) of two balls of radii `r1`, `r2` whose centres are `d`
+/// apart:
+///
+/// ```text
+/// V = π (r1 + r2 − d)² (d² + 2d(r1 + r2) − 3(r1 − r2)²) / (12 d)      for |r1 − r2| < d < r1 + r2
+/// ```
+///
+/// the smaller ball's volume when it is contained (`d ≤ |r1 − r2|`, including `d = 0`), and 0
+/// when the balls are disjoint or touch (`d ≥ r1 + r2`). The second factor is written with
+/// `−3(r1 − r2)²` so that equal radii at tiny `d` do not cancel. The result is clamped to the
+/// smaller ball's volume. Negative or NaN radii count as 0, a negative `d` as `|d|`, a NaN `d`
+/// gives 0. Never NaN.
+pub fn sphere_lens_volume(r1: f64, r2: f64, d: f64) -> f64 {
+    let r1 = if r1 > 0.0 { r1 } else { 0.0 };
+    let r2 = if r2 > 0.0 { r2 } else { 0.0 };
+    let (big, small) = if r1 >= r2 { (r1, r2) } else { (r2, r1) };
+    let Some(d) = sanitize_distance(d) else {
+        return 0.0;
+    };
+    if small == 0.0 || d >= big + small {
+        return 0.0;
+    }
+    let small_volume = ball_volume(small);
+    if d <= big - small {
+        return small_volume;
+    }
+    let sum = big + small;
+    let diff = big - small;
+    let v = PI * (sum - d) * (sum - d) * (d * (d + 2.0 * sum) - 3.0 * diff * diff) / (12.0 * d);
+    if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(0.0, small_volume)
+    }
+}
+
+/// Volume of a node box as the probability model sees it: the product of its sides after
+/// raising each to at least [`MIN_SIDE_RATIO`] × the longest side, so flat nodes keep a
+/// positive volume. Pass this (not the raw box volume) as `volume_a`/`volume_b` to
+/// [`cell_counts`], so that it matches [`overlap_volume`]. 0 only for a box whose sides are all
+/// 0 (or NaN).
+pub fn node_volume(sides: [f32; 3]) -> f64 {
+    let [a, b, c] = thickened_sides(sides);
+    let v = a * b * c;
+    if v.is_nan() { 0.0 } else { v }
+}
+
+/// The overlap-volume estimate `V̂` used by the model: the box formula
+/// ([`box_overlap_volume`]) when the two node volumes differ by at most
+/// [`SIZE_RATIO_THRESHOLD`], otherwise the lens of the bounding spheres
+/// ([`sphere_lens_volume`], radius = half the box diagonal), as in S1 §6.5.
+///
+/// Both use the sides thickened as in [`node_volume`] (flat nodes get a positive volume), and
+/// the result is clamped to the smaller [`node_volume`]: it is an upper-bound-style estimate
+/// `≤ min(node_volume(A), node_volume(B))`. The formula only sees the centre distance, so it is
+/// positive for some disjoint boxes: run a real box-overlap test first. Never NaN.
+pub fn overlap_volume(sides_a: [f32; 3], sides_b: [f32; 3], d: f32) -> f64 {
+    let ta = thickened_sides(sides_a);
+    let tb = thickened_sides(sides_b);
+    let va = ta[0] * ta[1] * ta[2];
+    let vb = tb[0] * tb[1] * tb[2];
+    let (vmin, vmax) = if va <= vb { (va, vb) } else { (vb, va) };
+    if vmin.is_nan() || vmin <= 0.0 {
+        return 0.0;
+    }
+    let d = f64::from(d);
+    let v = if vmax > SIZE_RATIO_THRESHOLD * vmin {
+        let ra = 0.5 * ta[0].hypot(ta[1]).hypot(ta[2]);
+        let rb = 0.5 * tb[0].hypot(tb[1]).hypot(tb[2]);
+        sphere_lens_volume(ra, rb, d)
+    } else {
+        box_overlap_sorted(ta, tb, d)
+    };
+    if v.is_nan() { 0.0 } else { v.min(vmin) }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Cell counts
+// ---------------------------------------------------------------------------------------------
+
+/// The three integers of the balls-in-bins model for one node pair (S1 §6.4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct CellCounts {
+    /// Number of cells in `A ∩ B`.
+    pub s: u32,
+    /// Number of possible collision ("well-filled") cells of `A` in `A ∩ B`; `≤ s`.
+    pub s_a: u32,
+    /// Number of possible collision cells of `B` in `A ∩ B`; `≤ s`.
+    pub s_b: u32,
+}
+
+/// `round(count · s / cells)` in exact integer arithmetic (halves round up).
+fn scaled_count(count: u32, s: u32, cells: u32) -> u32 {
+    let count = u128::from(count.min(cells));
+    let num = 2 * count * u128::from(s) + u128::from(cells);
+    let r = num / (2 * u128::from(cells));
+    r.min(u128::from(s)) as u32
+}
+
+/// The runtime numbers `s`, `s_A`, `s_B` of a node pair (the §1.4 reconstruction
+/// *\[RECON\]*; the papers defer it):
+///
+/// - `v = max(volume_a, volume_b) / cells_per_node`: the cell volume of the coarser grid;
+/// - `s = max(1, round(V̂ / v))`, at most `cells_per_node` (the overlap cannot hold more cells
+///   than a node), and `s = 0` when `V̂ = 0` (no overlap: probability 0);
+/// - `s_A = min(s, round(ρ_A · s))`, `s_B = min(s, round(ρ_B · s))` with the fill densities
+///   `ρ = well_filled / cells_per_node` (counts above `cells_per_node` are clamped).
+///
+/// `volume_a`/`volume_b` should be [`node_volume`]s, `overlap_volume` an [`overlap_volume`].
+/// Degenerate input: `cells_per_node = 0`, or `V̂` zero, negative or NaN, gives all zeros.
+/// When both volumes are zero, NaN or infinite while `V̂ > 0` (the caller passed raw volumes
+/// of flat nodes), there is no scale to measure `V̂` against, and the overlap is taken as a
+/// whole node: `s = cells_per_node` (the conservative choice: it maximises the probability).
+/// Integer rounding of `ρ·s` is exact (no float), halves round up. Never overflows.
+pub fn cell_counts(
+    overlap_volume: f64,
+    volume_a: f64,
+    volume_b: f64,
+    well_filled_a: u32,
+    well_filled_b: u32,
+    cells_per_node: u32,
+) -> CellCounts {
+    if cells_per_node == 0 || overlap_volume.is_nan() || overlap_volume <= 0.0 {
+        return CellCounts::default();
+    }
+    let clean = |v: f64| if v > 0.0 && v.is_finite() { v } else { 0.0 };
+    let vmax = clean(volume_a).max(clean(volume_b));
+    let n = cells_per_node;
+    let s = if vmax > 0.0 {
+        let cells = overlap_volume / vmax * f64::from(n);
+        // `cells` > 0 here (both operands positive); it may be +inf.
+        cells.round().clamp(1.0, f64::from(n)) as u32
+    } else {
+        n
+    };
+    CellCounts {
+        s,
+        s_a: scaled_count(well_filled_a, s, n),
+        s_b: scaled_count(well_filled_b, s, n),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// ln n!
+// ---------------------------------------------------------------------------------------------
+
+/// Entries of the cached `ln n!` table.
+const LN_FACT_TABLE_LEN: usize = 4096;
+
+static LN_FACT: LazyLock<Box<[f64]>> = LazyLock::new(|| {
+    (0..LN_FACT_TABLE_LEN as u32)
+        .map(ln_factorial_uncached)
+        .collect()
+});
+
+/// `ln n!` without the table: exact product up to 22! (all exactly representable in `f64`),
+/// Stirling's series (terms to `n⁻⁹`, truncation error below `10⁻¹⁷`) beyond.
+fn ln_factorial_uncached(n: u32) -> f64 {
+    if n <= 22 {
+        let mut p = 1.0f64;
+        for i in 2..=n {
+            p *= f64::from(i);
+        }
+        return p.ln();
+    }
+    const HALF_LN_2PI: f64 = 0.918_938_533_204_672_8;
+    let x = f64::from(n);
+    let inv = 1.0 / x;
+    let inv2 = inv * inv;
+    let series = inv
+        * (1.0 / 12.0
+            - inv2 * (1.0 / 360.0 - inv2 * (1.0 / 1260.0 - inv2 * (1.0 / 1680.0 - inv2 / 1188.0))));
+    (x + 0.5) * x.ln() - x + HALF_LN_2PI + series
+}
+
+/// `ln n!`, accurate to a few units in the last place (about `10⁻¹⁵` relative) for every `n`:
+/// a lazily built table for `n < 4096` (32 KiB), Stirling's series beyond.
+#[inline]
+pub fn ln_factorial(n: u32) -> f64 {
+    match LN_FACT.get(n as usize) {
+        Some(&v) => v,
+        None => ln_factorial_uncached(n),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Hypergeometric law
+// ---------------------------------------------------------------------------------------------
+
+/// `P(t) = C(s_B, t)·C(s − s_B, s_A − t) / C(s, s_A)` on its support `lo..=hi`.
+#[derive(Debug, Clone, Copy)]
+struct Hyper {
+    s: f64,
+    sa: f64,
+    sb: f64,
+    s_u: u32,
+    sa_u: u32,
+    sb_u: u32,
+    lo: u32,
+    hi: u32,
+}
+
+impl Hyper {
+    /// Counts above `s` are clamped to `s`.
+    fn new(s: u32, s_a: u32, s_b: u32) -> Self {
+        let sa = s_a.min(s);
+        let sb = s_b.min(s);
+        let lo = (u64::from(sa) + u64::from(sb)).saturating_sub(u64::from(s)) as u32;
+        Self {
+            s: f64::from(s),
+            sa: f64::from(sa),
+            sb: f64::from(sb),
+            s_u: s,
+            sa_u: sa,
+            sb_u: sb,
+            lo,
+            hi: sa.min(sb),
+        }
+    }
+
+    /// `P(t+1) / P(t)` for `lo ≤ t < hi`.
+    #[inline]
+    fn ratio_up(&self, t: u32) -> f64 {
+        let t = f64::from(t);
+        ((self.sb - t) * (self.sa - t)) / ((t + 1.0) * (self.s - self.sa - self.sb + t + 1.0))
+    }
+
+    /// `P(t−1) / P(t)` for `lo < t ≤ hi`.
+    #[inline]
+    fn ratio_down(&self, t: u32) -> f64 {
+        let t = f64::from(t);
+        (t * (self.s - self.sa - self.sb + t)) / ((self.sb - t + 1.0) * (self.sa - t + 1.0))
+    }
+
+    /// A mode, `⌊(s_A+1)(s_B+1)/(s+2)⌋`, clamped to the support.
+    fn mode(&self) -> u32 {
+        let m =
+            (u128::from(self.sa_u) + 1) * (u128::from(self.sb_u) + 1) / (u128::from(self.s_u) + 2);
+        (m.min(u128::from(self.hi)) as u32).max(self.lo)
+    }
+
+    /// `ln P(lo)`.
+    fn ln_p_lo(&self) -> f64 {
+        let lf = ln_factorial;
+        let (s, sa, sb) = (self.s_u, self.sa_u, self.sb_u);
+        if self.lo == 0 {
+            // C(s−s_B, s_A) / C(s, s_A)
+            lf(s - sb) + lf(s - sa) - lf(s) - lf(s - sa - sb)
+        } else {
+            // C(s_B, lo) / C(s, s_A), since s_A − lo = s − s_B.
+            lf(sb) + lf(sa) - lf(self.lo) - lf(s)
+        }
+    }
+
+    /// The streaming evaluation, accurate in relative terms for every tail. Calls
+    /// `visit(x, U(x))` with the unnormalised upper tail `U(x) = Σ_{t ≥ x} w(t)` for every
+    /// `x` in `lo < x ≤ min(k, hi)`, in descending order, and returns the normaliser
+    /// `Σ_t w(t)`, so that `Pr[c ≥ x] = U(x) / returned`.
+    ///
+    /// The weights are anchored at the mode (`w = 1`, no overflow or underflow of the bulk) and
+    /// summed outward, with the sums of positive terms only (no cancellation). Terms are dropped
+    /// once a geometric bound (valid because the law is log-concave) shows the rest is below
+    /// `2^-60` of the running sum; the cost is `O(k + width)`, the width being about 18
+    /// standard deviations.
+    fn walk(&self, k: u32, mut visit: impl FnMut(u32, f64)) -> f64 {
+        let kk = k.min(self.hi);
+        let m = self.mode();
+
+        // Upward pass from the mode: find where the upper terms become negligible.
+        let mut t = m;
+        let mut w = 1.0f64;
+        let mut beyond = if m > kk { 1.0 } else { 0.0 };
+        while t < self.hi {
+            let nw = w * self.ratio_up(t);
+            if nw < WEIGHT_FLOOR {
+                break; // every later term is below 10⁻²⁸⁰ of the mode: flushed to 0
+            }
+            t += 1;
+            w = nw;
+            if t > kk {
+                beyond += w;
+                if t < self.hi {
+                    let r = self.ratio_up(t);
+                    if r < 1.0 && w * r <= TRUNC_EPS * beyond * (1.0 - r) {
+                        break;
+                    }
+                }
+            }
+        }
+
+        // Tails above the last non-negligible term are 0.
+        let mut x = kk;
+        while x > t && x > self.lo {
+            visit(x, 0.0);
+            x -= 1;
+        }
+
+        // Downward pass: running suffix sums.
+        let mut u = 0.0f64;
+        loop {
+            u += w;
+            if t <= kk && t > self.lo {
+                visit(t, u);
+            }
+            if t <= self.lo {
+                break;
+            }
+            let nw = w * self.ratio_down(t);
+            let negligible = nw < WEIGHT_FLOOR
+                || (t - 1 > self.lo && {
+                    let r = self.ratio_down(t - 1);
+                    r < 1.0 && nw <= TRUNC_EPS * u * (1.0 - r)
+                });
+            if negligible {
+                let mut x = (t - 1).min(kk);
+                while x > self.lo {
+                    visit(x, u);
+                    x -= 1;
+                }
+                break;
+            }
+            t -= 1;
+            w = nw;
+        }
+        u
+    }
+
+    /// `out[i] = Pr[c ≥ i + 1]` for every `i < out.len()`.
+    fn tails_into(&self, out: &mut [f64]) {
+        let len = u32::try_from(out.len()).unwrap_or(u32::MAX);
+        // Trivial entries: forced (pigeonhole) collisions and impossible counts.
+        for (i, o) in out.iter_mut().enumerate() {
+            let x = i as u64 + 1;
+            *o = if x <= u64::from(self.lo) {
+                1.0
+            } else if x > u64::from(self.hi) {
+                0.0
+            } else {
+                continue;
+            };
+        }
+        let kk = len.min(self.hi);
+        if kk <= self.lo {
+            return;
+        }
+
+        // Head path: the head Σ_{lo ≤ t < x} P(t) by the recurrence from P(lo), exact enough
+        // while it is at most ½ (then 1 − head loses nothing). The terms are carried scaled by
+        // 1/P(lo), so a P(lo) that underflows (bulk far above x) costs nothing either.
+        let ln_p = self.ln_p_lo();
+        let mut p = 1.0f64;
+        let mut head = 0.0f64;
+        for x in self.lo + 1..=kk {
+            head += p;
+            out[x as usize - 1] = head;
+            if x < kk {
+                p *= self.ratio_up(x - 1);
+            }
+        }
+        if head.is_finite() {
+            let ln_head = head.ln() + ln_p;
+            if ln_head < HEAD_NEGLIGIBLE_LN {
+                // Every head is below 1e-304: all tails are 1 in f64.
+                out[self.lo as usize..kk as usize].fill(1.0);
+                return;
+            }
+            if ln_p > HEAD_MIN_LN && ln_head <= -std::f64::consts::LN_2 {
+                let scale = ln_p.exp();
+                for o in &mut out[self.lo as usize..kk as usize] {
+                    *o = (1.0 - *o * scale).clamp(0.0, 1.0);
+                }
+                return;
+            }
+        }
+
+        // Small tails: streaming sums from the mode, relative accuracy kept.
+        let total = self.walk(kk, |x, u| out[x as usize - 1] = u);
+        for o in &mut out[self.lo as usize..kk as usize] {
+            *o = (*o / total).min(1.0);
+        }
+    }
+}
+
+/// Fills `out[i] = Pr[c(A∩B) ≥ i + 1]` (Eq. 8) for `i = 0..out.len()`, all in one pass of the
+/// ratio recurrence. Same model and guarantees as [`prob_at_least`]; no allocation. Entries are
+/// non-increasing in `i`. Counts above `s` are clamped to `s`.
+pub fn tail_probabilities(s: u32, s_a: u32, s_b: u32, out: &mut [f64]) {
+    Hyper::new(s, s_a, s_b).tails_into(out);
+}
+
+/// Eq. 8: the probability that at least `x` collision cells exist in `A ∩ B`,
+///
+/// ```text
+/// Pr[c ≥ x] = 1 − Σ_{t<x} C(s_B, t)·C(s − s_B, s_A − t) / C(s, s_A)
+/// ```
+///
+/// (the hypergeometric upper tail: `s` bins, `s_A` blue and `s_B` red balls, at most one ball
+/// of each colour per bin). Symmetric in `s_A` and `s_B`.
+///
+/// - `x = 0` → 1; `x > min(s_A, s_B)` → 0 (so `s = 0`, `s_A = 0` or `s_B = 0` give 0 for
+///   `x ≥ 1`).
+/// - Pigeonhole: if `s_A + s_B > s`, at least `s_A + s_B − s` cells are forced to collide, and
+///   the result is exactly 1 for `x ≤ s_A + s_B − s`.
+/// - Counts above `s` are clamped to `s`.
+///
+/// Computed without binomials (see the [module docs](self)): absolute error about
+/// `10⁻¹⁶ · ln(s!)` (below `10⁻¹³` for `s ≤ 100`), and tails below ½ keep a relative accuracy of
+/// about `10⁻¹³`. Cost `O(x)` when the result is at least ½, otherwise `O(x + √s)`-ish
+/// (the law's width). Always finite, in `[0, 1]`.
+pub fn prob_at_least(s: u32, s_a: u32, s_b: u32, x: u32) -> f64 {
+    if x == 0 {
+        return 1.0;
+    }
+    let h = Hyper::new(s, s_a, s_b);
+    if x <= h.lo {
+        return 1.0;
+    }
+    if x > h.hi {
+        return 0.0;
+    }
+    if x as usize <= STACK_X {
+        let mut buf = [0.0f64; STACK_X];
+        let out = &mut buf[..x as usize];
+        h.tails_into(out);
+        return out[x as usize - 1];
+    }
+    let mut ux = 0.0;
+    let total = h.walk(x, |xx, u| {
+        if xx == x {
+            ux = u;
+        }
+    });
+    (ux / total).min(1.0)
+}
+
+/// `LB` clamped to `[0, 1]`, NaN as 0.
+#[inline]
+fn clamp_lb(lb: f64) -> f64 {
+    if lb > 0.0 { lb.min(1.0) } else { 0.0 }
+}
+
+/// Eq. 9: the estimated probability that the polygons of a node pair intersect,
+///
+/// ```text
+/// max_{1 ≤ x ≤ min(s_A, s_B, x_max)}  Pr[c ≥ x] · (1 − (1 − LB)^x)
+/// ```
+///
+/// (`1 − (1 − LB)^x` is the chance that at least one of `x` collision cells really collides;
+/// it is summed as `LB·(1 + (1−LB) + … )`, positive terms only.) `LB` is clamped to `[0, 1]`
+/// (NaN counts as 0): `LB = 0` gives 0, `LB = 1` gives `Pr[c ≥ 1]`. `x_max = 0`, `s_A = 0` or
+/// `s_B = 0` give 0. The papers cap `x` at [`DEFAULT_X_MAX`]. Non-decreasing in `LB` and in
+/// `x_max`; always in `[0, 1]`. All tails come from one pass of the recurrence; no allocation.
+///
+/// The traversal should call
+/// [`collision_probability_tabled`](super::tables::collision_probability_tabled) instead
+/// (same value within `3·10⁻⁸`, faster).
+pub fn collision_probability(counts: CellCounts, lb: f64, x_max: u32) -> f64 {
+    let lb = clamp_lb(lb);
+    if lb == 0.0 {
+        return 0.0;
+    }
+    let h = Hyper::new(counts.s, counts.s_a, counts.s_b);
+    let k = h.hi.min(x_max);
+    if k == 0 {
+        return 0.0;
+    }
+    if k as usize <= STACK_X {
+        let mut buf = [0.0f64; STACK_X];
+        let tails = &mut buf[..k as usize];
+        h.tails_into(tails);
+        let q = 1.0 - lb;
+        let mut f = 0.0f64;
+        let mut best = 0.0f64;
+        for &t in tails.iter() {
+            if t <= best {
+                break; // tails are non-increasing and f ≤ 1: nothing later can win
+            }
+            f = lb + q * f;
+            best = best.max(t * f);
+        }
+        return best.min(1.0);
+    }
+    // Many x: stream the tails (descending x), with 1 − (1−LB)^x = −expm1(x·ln(1−LB)).
+    let g = (-lb).ln_1p();
+    let f = |x: u32| -(f64::from(x) * g).exp_m1();
+    let mut best_unnorm = 0.0f64;
+    let total = h.walk(k, |x, u| best_unnorm = best_unnorm.max(u * f(x)));
+    let mut best = best_unnorm / total;
+    if h.lo > 0 {
+        best = best.max(f(h.lo.min(k)));
+    }
+    if best.is_nan() {
+        0.0
+    } else {
+        best.clamp(0.0, 1.0)
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Curvature term
+// ---------------------------------------------------------------------------------------------
+
+/// The paper's curvature term (S1 §6.4): `LB ≈ (d_A + d_B) / (d_maxA + d_maxB)`, the node
+/// depths over the hierarchies' maximum depths. 0 when both maximum depths are 0 (single-node
+/// trees); clamped to `[0, 1]` (a depth above its maximum gives at most 1). No overflow.
+#[inline]
+pub fn depth_lower_bound(depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64 {
+    let num = f64::from(depth_a) + f64::from(depth_b);
+    let den = f64::from(max_depth_a) + f64::from(max_depth_b);
+    if den > 0.0 { (num / den).min(1.0) } else { 0.0 }
+}
+
+/// The curvature term `LB(c_{A∩B})` of Eq. 7/9: a lower-bound-style estimate of the probability
+/// that a collision cell really holds intersecting polygons, from the node depths and the
+/// hierarchies' maximum depths. Implementations must return a value in `[0, 1]`.
+pub trait CurvatureBound: Send + Sync {
+    /// `LB` for nodes at depths `depth_a`, `depth_b` of hierarchies of maximum depths
+    /// `max_depth_a`, `max_depth_b`.
+    fn lb(&self, depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64;
+}
+
+/// The paper's curvature term, [`depth_lower_bound`]: 0 at the roots, 1 at the deepest leaves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct DepthRatio;
+
+impl CurvatureBound for DepthRatio {
+    #[inline]
+    fn lb(&self, depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64 {
+        depth_lower_bound(depth_a, depth_b, max_depth_a, max_depth_b)
+    }
+}
+
+/// A fitted curvature term: `LB` looked up by the summed depth `d_A + d_B` (LB takes only
+/// `d_maxA + d_maxB + 1` distinct values for one pair of hierarchies). Entries outside the table,
+/// and entries given as NaN ("not fitted"), fall back to [`DepthRatio`].
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct PerDepthTable {
+    values: Vec<f64>,
+}
+
+impl PerDepthTable {
+    /// A table with `values[d_A + d_B] = LB`. Values are clamped into `[0, 1]` (`+∞` → 1,
+    /// `−∞` → 0); NaN entries are kept and mean "use [`DepthRatio`] for this depth sum".
+    pub fn new(values: Vec<f64>) -> Self {
+        let values = values
+            .into_iter()
+            .map(|v| if v.is_nan() { v } else { v.clamp(0.0, 1.0) })
+            .collect();
+        Self { values }
+    }
+
+    /// The stored values, indexed by `d_A + d_B` (after clamping; NaN = not fitted).
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+}
+
+impl CurvatureBound for PerDepthTable {
+    #[inline]
+    fn lb(&self, depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64 {
+        let sum = u64::from(depth_a) + u64::from(depth_b);
+        match usize::try_from(sum).ok().and_then(|i| self.values.get(i)) {
+            Some(&v) if !v.is_nan() => v,
+            _ => depth_lower_bound(depth_a, depth_b, max_depth_a, max_depth_b),
+        }
+    }
+}

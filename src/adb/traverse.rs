@@ -1,0 +1,371 @@
+//! The probability-guided, time-critical traversal of two ADB-trees.
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+
+use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
+use super::tree::AdbTree;
+use crate::bvh::box_test::RelativeFrame;
+use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
+use crate::geometry::{Pose, triangles_intersect};
+
+/// When the traversal must stop, whatever it has found.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Budget {
+    /// No limit: stop only on the `p_min`/`k_min` rule or an empty queue.
+    #[default]
+    Unlimited,
+    /// Stop after this many node pairs have been visited (deterministic, run to run).
+    NodePairs(u64),
+    /// Stop once this much time has passed since the query started (checked every
+    /// [`TIME_CHECK_INTERVAL`] queue pops, so the check costs nothing measurable).
+    Time(Duration),
+}
+
+/// Queue pops between two clock reads of a [`Budget::Time`] query.
+pub const TIME_CHECK_INTERVAL: u32 = 16;
+
+/// Highest probability an *estimate* may report: only an exact triangle test is certain, so
+/// with `p_min = 1` only exact hits count.
+pub const MAX_ESTIMATE: f64 = 1.0 - 1e-9;
+
+/// Parameters of [`adb_intersects`].
+#[derive(Debug, Clone)]
+pub struct AdbQuery {
+    /// A node pair with at least this probability counts as a collision pair (papers: 0.99).
+    pub p_min: f64,
+    /// Collision pairs needed to answer "collision" (papers: 10).
+    pub k_min: u32,
+    /// When to stop regardless.
+    pub budget: Budget,
+    /// Test the triangles of leaf pairs exactly: an intersecting pair is a certain collision,
+    /// and no overlapping pair is pruned for a zero estimate, so with `p_min = 1` and no budget
+    /// the answer equals the exact query's. Costs the triangle tests.
+    pub exact_leaves: bool,
+    /// The probability model.
+    pub estimator: Arc<dyn CollisionEstimator>,
+    /// Node pairs with a probability at most this are not expanded (the papers: 0, "insert if
+    /// p > 0"). With a calibrated estimator ([`FittedEstimator`](super::FittedEstimator)) a
+    /// small value such as 0.01 skips unlikely regions, at that risk per pair.
+    pub p_prune: f64,
+    /// How the answer is decided when `k_min` pairs were not found.
+    pub decision: Decision,
+}
+
+/// How [`adb_intersects`] answers when fewer than `k_min` pairs reached `p_min`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Decision {
+    /// The papers' rule: an emptied queue means "no collision"; an exhausted budget means
+    /// "collision" if any pair reached `p_min`.
+    Paper,
+    /// Collision iff the reported confidence ([`AdbOutcome::probability`]) is at least ½: the
+    /// right rule when the estimator is calibrated.
+    #[default]
+    Confidence,
+}
+
+impl Default for AdbQuery {
+    /// The papers' `p_min = 0.99`, `k_min = 10`, no budget, with the calibrated estimator
+    /// ([`CalibratedEstimator`]) and the confidence decision: what this crate recommends.
+    fn default() -> Self {
+        Self {
+            p_min: 0.99,
+            k_min: 10,
+            budget: Budget::Unlimited,
+            exact_leaves: false,
+            estimator: Arc::new(CalibratedEstimator::default()),
+            p_prune: 0.0,
+            decision: Decision::Confidence,
+        }
+    }
+}
+
+impl AdbQuery {
+    /// Klein & Zachmann's method as published: [`PaperEstimator`] (depth-ratio curvature term),
+    /// `p_min = 0.99`, `k_min = 10`, the papers' decision rule, no pruning beyond `p = 0`.
+    pub fn paper() -> Self {
+        Self {
+            estimator: Arc::new(PaperEstimator::default()),
+            decision: Decision::Paper,
+            ..Self::default()
+        }
+    }
+
+    /// The default query with a time budget.
+    pub fn with_budget(budget: Budget) -> Self {
+        Self {
+            budget,
+            ..Self::default()
+        }
+    }
+}
+
+/// An approximate contact region: where the most probable colliding node pair overlaps.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactWitness {
+    /// Approximate contact point (world space): between the two nodes' box centres.
+    pub point: Vec3,
+    /// Approximate contact normal (world space, unit): the direction to push the second mesh
+    /// away from the first (from the two nodes' mean surface normals).
+    pub normal: Vec3,
+    /// The node pair (first tree, second tree).
+    pub nodes: (u32, u32),
+    /// The intersecting triangle pair, when an exact leaf test found one.
+    pub triangles: Option<TrianglePair>,
+}
+
+/// The answer of [`adb_intersects`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AdbOutcome {
+    /// Whether the meshes are reported as colliding.
+    pub collides: bool,
+    /// Confidence that they collide, in `[0, 1]`: 1 for an exact hit, else `1 − Π (1 − p)` over
+    /// the traversal's final frontier (the pairs queued, and the leaf pairs and pruned pairs it
+    /// did not expand), which together cover every overlapping leaf pair; 0 when no pair was
+    /// left (every overlapping pair was ruled out).
+    pub probability: f64,
+    /// Node pairs found with probability at least `p_min` (exact hits included).
+    pub pairs_found: u32,
+    /// Node pairs visited (probability estimates or box tests).
+    pub node_pairs_visited: u64,
+    /// Whether the budget ran out before the answer was settled.
+    pub budget_exhausted: bool,
+    /// Highest pair probability seen.
+    pub max_pair_probability: f64,
+    /// Where the collision probably is: the most probable node pair seen, or the exact hit
+    /// (`None` if no node pair below the roots overlapped).
+    pub witness: Option<ContactWitness>,
+}
+
+/// Reusable memory of the ADB traversal (the priority queue and the exact-leaf workspace).
+#[derive(Debug, Default)]
+pub struct AdbWorkspace {
+    heap: BinaryHeap<Entry>,
+    exact: QueryWorkspace,
+}
+
+impl AdbWorkspace {
+    /// An empty workspace.
+    pub fn new() -> Self {
+        Self::default()
+    }
+}
+
+/// A queued node pair, ordered by probability, ties broken by node indices (deterministic).
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    p: f64,
+    a: u32,
+    b: u32,
+}
+
+impl PartialEq for Entry {
+    fn eq(&self, o: &Self) -> bool {
+        self.cmp(o) == Ordering::Equal
+    }
+}
+impl Eq for Entry {}
+impl PartialOrd for Entry {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+impl Ord for Entry {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.p
+            .total_cmp(&o.p)
+            .then_with(|| o.a.cmp(&self.a))
+            .then_with(|| o.b.cmp(&self.b))
+    }
+}
+
+/// Time-critical collision query between two ADB-trees at poses (Klein & Zachmann's
+/// traversal): node pairs are expanded in order of their estimated probability of containing
+/// intersecting triangles; the answer is "collision" once `k_min` pairs reach `p_min`, "no
+/// collision" when no pair with a positive probability is left, and the best estimate so far
+/// when the budget runs out.
+///
+/// # Example
+/// ```
+/// use stochastic_collision::prelude::*;
+/// use stochastic_collision::adb::{AdbQuery, AdbTree, AdbWorkspace, adb_intersects};
+/// let ball = AdbTree::new(CollisionMesh::new(generate::icosphere(1.0, 3)));
+/// let mut ws = AdbWorkspace::new();
+/// let deep = Pose::from_translation(Vec3::new(1.0, 0.0, 0.0));
+/// let out = adb_intersects(&ball, &Pose::IDENTITY, &ball, &deep, &AdbQuery::default(), &mut ws);
+/// assert!(out.collides && out.probability > 0.9);
+/// let apart = Pose::from_translation(Vec3::new(2.5, 0.0, 0.0));
+/// let out = adb_intersects(&ball, &Pose::IDENTITY, &ball, &apart, &AdbQuery::default(), &mut ws);
+/// assert!(!out.collides);
+/// ```
+pub fn adb_intersects(
+    a: &AdbTree,
+    pose_a: &Pose,
+    b: &AdbTree,
+    pose_b: &Pose,
+    query: &AdbQuery,
+    ws: &mut AdbWorkspace,
+) -> AdbOutcome {
+    let start = Instant::now();
+    let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
+    let (na, nb) = (ma.bvh().nodes(), mb.bvh().nodes());
+    let rel = pose_a.inverse_mul(pose_b);
+    let frame = RelativeFrame::new(&rel, ma.bvh(), mb.bvh());
+    let rel64 = rel.to_f64();
+    let mut out = AdbOutcome {
+        collides: false,
+        probability: 0.0,
+        pairs_found: 0,
+        node_pairs_visited: 1,
+        budget_exhausted: false,
+        max_pair_probability: 0.0,
+        witness: None,
+    };
+    if !frame.overlap(&na[0], &nb[0]) {
+        return out;
+    }
+    let witness = |ia: u32, ib: u32, triangles: Option<TrianglePair>| {
+        let (x, y) = (&na[ia as usize], &nb[ib as usize]);
+        let ca = pose_a.transform_point(x.aabb().center());
+        let cb = pose_a.transform_point(frame.transform_point(y.aabb().center()));
+        let n = pose_a.transform_vector(a.nodes()[ia as usize].normal)
+            - pose_b.transform_vector(b.nodes()[ib as usize].normal);
+        let normal = n
+            .try_normalize()
+            .or_else(|| (cb - ca).try_normalize())
+            .unwrap_or(Vec3::Y);
+        ContactWitness {
+            point: (ca + cb) * 0.5,
+            normal,
+            nodes: (ia, ib),
+            triangles,
+        }
+    };
+    let pair_probability = |ia: u32, ib: u32, x: &BvhNode, y: &BvhNode| {
+        let pair = NodePair {
+            a: &a.nodes()[ia as usize],
+            b: &b.nodes()[ib as usize],
+            max_depth_a: a.max_depth(),
+            max_depth_b: b.max_depth(),
+            center_distance: frame.center_distance(x, y),
+            cells_a: a.cells_per_node(),
+            cells_b: b.cells_per_node(),
+            calibration_a: a.calibration(),
+            calibration_b: b.calibration(),
+        };
+        query.estimator.probability(&pair).clamp(0.0, MAX_ESTIMATE)
+    };
+    // Σ ln(1 − p) over the frontier: the node pairs queued or left as leaves or pruned, which
+    // together cover every overlapping leaf pair. Under independence, the probability that no
+    // pair collides is exp(this).
+    let mut frontier_log_miss = 0.0f64;
+    let mut frontier_len = 0usize;
+    let mut best: Option<(f64, u32, u32)> = None;
+    let mut pops = 0u32;
+    ws.heap.clear();
+    ws.heap.push(Entry { p: 1.0, a: 0, b: 0 });
+    ws.exact.cache_begin(mb.mesh().vertex_count());
+    'queue: while let Some(e) = ws.heap.pop() {
+        pops += 1;
+        let over = match query.budget {
+            Budget::Unlimited => false,
+            Budget::NodePairs(n) => out.node_pairs_visited >= n,
+            Budget::Time(t) => pops.is_multiple_of(TIME_CHECK_INTERVAL) && start.elapsed() >= t,
+        };
+        if over {
+            out.budget_exhausted = true;
+            ws.heap.push(e);
+            break;
+        }
+        if (e.a, e.b) != (0, 0) {
+            frontier_log_miss -= (1.0 - e.p).ln();
+            frontier_len -= 1;
+        }
+        let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
+        if x.is_leaf() && y.is_leaf() {
+            // Only queued in exact-leaves mode: decide the pair exactly.
+            for &t in ma.bvh().triangles_of(x) {
+                let tri_a = ma.mesh().triangle(t as usize).map(|p| p.as_dvec3());
+                for &u in mb.bvh().triangles_of(y) {
+                    let tri_b = ws.exact.cached_triangle(
+                        mb.mesh().triangles()[u as usize],
+                        mb.mesh().positions(),
+                        &rel64,
+                    );
+                    if triangles_intersect(&tri_a, &tri_b) {
+                        out.collides = true;
+                        out.probability = 1.0;
+                        out.max_pair_probability = 1.0;
+                        out.pairs_found += 1;
+                        out.witness = Some(witness(e.a, e.b, Some(TrianglePair { a: t, b: u })));
+                        break 'queue;
+                    }
+                }
+            }
+            continue;
+        }
+        let children = |n: &BvhNode, i: u32| {
+            if n.is_leaf() {
+                [i, u32::MAX]
+            } else {
+                [n.left(), n.left() + 1]
+            }
+        };
+        for ia in children(x, e.a) {
+            if ia == u32::MAX {
+                continue;
+            }
+            for ib in children(y, e.b) {
+                if ib == u32::MAX {
+                    continue;
+                }
+                out.node_pairs_visited += 1;
+                let (cx, cy) = (&na[ia as usize], &nb[ib as usize]);
+                if !frame.overlap(cx, cy) {
+                    continue;
+                }
+                let p = pair_probability(ia, ib, cx, cy);
+                if p > out.max_pair_probability {
+                    out.max_pair_probability = p;
+                }
+                frontier_log_miss += (1.0 - p).ln();
+                frontier_len += 1;
+                if best.is_none_or(|(bp, _, _)| p > bp) {
+                    best = Some((p, ia, ib));
+                }
+                if p >= query.p_min {
+                    out.pairs_found += 1;
+                    if out.pairs_found >= query.k_min {
+                        out.collides = true;
+                        break 'queue;
+                    }
+                }
+                let both_leaves = cx.is_leaf() && cy.is_leaf();
+                if query.exact_leaves || (p > query.p_prune && !both_leaves) {
+                    ws.heap.push(Entry { p, a: ia, b: ib });
+                }
+            }
+        }
+    }
+    if out.probability < 1.0 {
+        let noisy_or = if frontier_len == 0 {
+            0.0
+        } else {
+            1.0 - frontier_log_miss.exp()
+        };
+        out.probability = noisy_or.clamp(0.0, 1.0);
+        if !out.collides {
+            out.collides = match query.decision {
+                Decision::Confidence => out.probability >= 0.5,
+                Decision::Paper => out.budget_exhausted && out.pairs_found >= 1,
+            };
+        }
+    }
+    if out.witness.is_none() {
+        out.witness = best.map(|(_, ia, ib)| witness(ia, ib, None));
+    }
+    out
+}
