@@ -518,10 +518,11 @@ fn write_outputs(
                 s.brier,
                 s.budget_kept
             )?;
+            // The table shows the headline configurations; summary.csv has them all.
             if c.label == DEFAULT_LABEL
+                || c.label == PAPER_LABEL
                 || c.label == BUDGET_20_LABEL
                 || c.family == "estimator"
-                || settings.full
             {
                 writeln!(
                     table,
@@ -585,7 +586,8 @@ fn plot_error_vs_time(
         let mut pts: Vec<(f64, f64)> = configs
             .iter()
             .enumerate()
-            .filter(|(_, c)| c.family == "calibrated" || c.family == "time budget")
+            // The accuracy-for-time trade: the time budgets, then no budget.
+            .filter(|(_, c)| c.family == "time budget" || c.label == DEFAULT_LABEL)
             .map(|(k, _)| {
                 let s = stats(records, |r| r.adb[k]);
                 (s.median_us, s.error)

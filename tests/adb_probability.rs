@@ -46,10 +46,8 @@ fn eq8_matches_exact_binomials_for_small_s() {
     let mut buf = vec![0.0; EXACT_S + 2];
     let mut checked = 0usize;
     for s in 0..=EXACT_S {
-        // Every triple for s ≤ 24, and a stride beyond (keeps the test well under a second).
-        let step = if s <= 24 { 1 } else { 3 };
-        for sa in (0..=s).step_by(step).chain([s]) {
-            for sb in (0..=s).step_by(step).chain([s.saturating_sub(1), s]) {
+        for sa in 0..=s {
+            for sb in 0..=s {
                 let exact = exact_tails(&c, s, sa, sb);
                 let (s32, a32, b32) = (s as u32, sa as u32, sb as u32);
                 tail_probabilities(s32, a32, b32, &mut buf[..exact.len() - 1]);
@@ -62,7 +60,7 @@ fn eq8_matches_exact_binomials_for_small_s() {
                     // Small tails keep their relative accuracy.
                     if e > 0.0 && e < 1e-3 {
                         assert!(
-                            ((p - e) / e).abs() <= 1e-10,
+                            ((p - e) / e).abs() <= 1e-11,
                             "relative: s={s} sa={sa} sb={sb} x={x}: {p} vs {e}"
                         );
                     }
@@ -75,7 +73,7 @@ fn eq8_matches_exact_binomials_for_small_s() {
             }
         }
     }
-    assert!(checked > 50_000, "{checked}");
+    assert!(checked > 1_000_000, "{checked}");
 }
 
 #[test]
@@ -238,8 +236,8 @@ fn eq9_collision_probability() {
         assert_eq!(collision_probability(c, -1.0, 10), 0.0);
         assert_eq!(collision_probability(c, f64::NAN, 10), 0.0);
         let p1 = prob_at_least(c.s, c.s_a, c.s_b, 1);
-        assert!((collision_probability(c, 1.0, 10) - p1).abs() < 1e-15);
-        assert!((collision_probability(c, 7.0, 10) - p1).abs() < 1e-15);
+        assert!((collision_probability(c, 1.0, 10) - p1).abs() < 1e-13);
+        assert!((collision_probability(c, 7.0, 10) - p1).abs() < 1e-13);
         assert_eq!(collision_probability(c, 0.5, 0), 0.0);
         // Monotone in LB and in the x cap.
         let mut prev = 0.0;

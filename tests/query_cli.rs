@@ -273,3 +273,104 @@ fn bad_input_exits_2_with_one_clear_line() {
         "--mode needs a value",
     );
 }
+
+#[test]
+fn adb_mode_answers_with_confidences_and_node_budgets_are_repeatable() {
+    let mesh = scratch("adb_torus.obj");
+    write_obj(&mesh, &generate::torus(1.0, 0.3, 40, 12));
+    let cm = CollisionMesh::new(TriMesh::from_obj(&mesh).unwrap());
+    let poses = near_contact_poses(&cm, &cm, 12, 0.1, 5);
+    let poses_path = scratch("adb_poses.csv");
+    write_poses_csv(
+        std::fs::File::create(&poses_path).unwrap(),
+        poses.iter().map(|p| p.pose),
+    )
+    .unwrap();
+    let (m, p) = (mesh.to_str().unwrap(), poses_path.to_str().unwrap());
+    let run_adb = |extra: &[&str]| {
+        let mut args = vec!["--a", m, "--b", m, "--poses", p, "--mode", "adb"];
+        args.extend_from_slice(extra);
+        let out = run(&args);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        rows(&out.stdout)
+    };
+    let default = run_adb(&[]);
+    assert_eq!(default.len(), poses.len());
+    for r in &default {
+        let p: f64 = r[2].parse().unwrap();
+        assert!((0.0..=1.0).contains(&p));
+        assert!(r[1] == "0" || r[1] == "1");
+        assert!(r[4].parse::<u64>().unwrap() >= 1);
+    }
+    // A node budget is deterministic: every column but the time is identical run to run.
+    let budgeted = |_: ()| run_adb(&["--budget-nodes", "50", "--p-min", "0.9", "--k-min", "3"]);
+    let (x, y) = (budgeted(()), budgeted(()));
+    for (a, b) in x.iter().zip(&y) {
+        assert_eq!((&a[1], &a[2], &a[4]), (&b[1], &b[2], &b[4]));
+    }
+    // Exact leaves with p_min = 1 answer exactly.
+    let exact = run(&["--a", m, "--b", m, "--poses", p, "--mode", "exact"]);
+    let exact = rows(&exact.stdout);
+    let hybrid = run_adb(&["--exact-leaves", "--p-min", "1"]);
+    for (a, b) in exact.iter().zip(&hybrid) {
+        assert_eq!(a[1], b[1]);
+    }
+    for estimator in ["paper", "planarity", "calibrated"] {
+        assert_eq!(
+            run_adb(&["--estimator", estimator, "--budget-us", "50"]).len(),
+            poses.len()
+        );
+    }
+}
+
+#[test]
+fn adb_flag_errors_exit_2() {
+    let mesh = scratch("flags.obj");
+    write_obj(&mesh, &generate::icosphere(1.0, 1));
+    let m = mesh.to_str().unwrap();
+    let poses = scratch("flags_poses.csv");
+    std::fs::write(&poses, "tx,ty,tz,qx,qy,qz,qw\n0,0,0,0,0,0,1\n").unwrap();
+    let p = poses.to_str().unwrap();
+    let base = ["--a", m, "--b", m, "--poses", p];
+    let with = |extra: &[&'static str]| {
+        let mut v: Vec<&str> = base.to_vec();
+        v.extend_from_slice(extra);
+        v
+    };
+    rejects(
+        &with(&["--mode", "adb", "--p-min", "2"]),
+        "--p-min: invalid value `2`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--k-min", "0"]),
+        "--k-min: invalid value `0`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--budget-us", "-5"]),
+        "--budget-us: invalid value `-5`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--budget-us", "5", "--budget-nodes", "9"]),
+        "at most one of",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--estimator", "magic"]),
+        "unknown estimator `magic`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--resolution", "99"]),
+        "--resolution: invalid value `99`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--solid"]),
+        "--solid applies to --mode exact only",
+    );
+    rejects(
+        &with(&["--mode", "exact", "--p-min", "0.5"]),
+        "--p-min applies to --mode adb only",
+    );
+}

@@ -2,7 +2,8 @@
 use super::fit::Calibration;
 use super::probability::{cell_counts, depth_lower_bound, overlap_volume};
 use super::tables::collision_probability_tabled;
-use super::tree::AdbNode;
+use super::tree::{AdbNode, AdbTree};
+use crate::bvh::box_test::RelativeFrame;
 
 /// Everything an estimator may use about one pair of overlapping nodes.
 #[derive(Debug, Clone, Copy)]
@@ -17,6 +18,9 @@ pub struct NodePair<'a> {
     pub max_depth_b: u32,
     /// Distance between the two boxes' centres.
     pub center_distance: f32,
+    /// How deeply the two boxes interpenetrate along their best separating face axis, relative
+    /// to the smaller box's largest half extent (0 when they only touch).
+    pub penetration: f32,
     /// Cells per node of the first tree's grids.
     pub cells_a: u32,
     /// Cells per node of the second tree's grids.
@@ -25,6 +29,45 @@ pub struct NodePair<'a> {
     pub calibration_a: Option<&'a Calibration>,
     /// The second tree's fitted calibration, if it has one.
     pub calibration_b: Option<&'a Calibration>,
+}
+
+impl<'a> NodePair<'a> {
+    /// The pair of node `ia` of `a` and node `ib` of `b`, `frame` placing `b` in `a`'s frame.
+    pub(crate) fn between(
+        a: &'a AdbTree,
+        b: &'a AdbTree,
+        frame: &RelativeFrame,
+        ia: u32,
+        ib: u32,
+        calibrated: bool,
+    ) -> Self {
+        let (x, y) = (
+            &a.collision_mesh().bvh().nodes()[ia as usize],
+            &b.collision_mesh().bvh().nodes()[ib as usize],
+        );
+        let (center_distance, separation) = frame.center_distance_and_separation(x, y);
+        let scale = (x.max - x.min)
+            .max_element()
+            .min((y.max - y.min).max_element())
+            * 0.5;
+        let penetration = if scale > 0.0 {
+            (-separation / scale).max(0.0)
+        } else {
+            0.0
+        };
+        NodePair {
+            a: &a.nodes()[ia as usize],
+            b: &b.nodes()[ib as usize],
+            max_depth_a: a.max_depth(),
+            max_depth_b: b.max_depth(),
+            center_distance,
+            penetration,
+            cells_a: a.cells_per_node(),
+            cells_b: b.cells_per_node(),
+            calibration_a: if calibrated { a.calibration() } else { None },
+            calibration_b: if calibrated { b.calibration() } else { None },
+        }
+    }
 }
 
 /// Estimates the probability that two overlapping nodes contain intersecting triangles.

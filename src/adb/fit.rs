@@ -107,7 +107,7 @@ impl FittedEstimator {
                         break;
                     }
                     if (ia, ib) != (0, 0) {
-                        let pair = node_pair(a, b, &frame, ia, ib);
+                        let pair = NodePair::between(a, b, &frame, ia, ib, false);
                         let raw = base.probability(&pair).clamp(0.0, 1.0);
                         let truth = subtrees_intersect(ma, mb, &rel, ia, ib, &mut ws);
                         let cell = &mut counts[bucket(&pair)][raw_bin(raw)];
@@ -167,30 +167,6 @@ impl FittedEstimator {
     /// The mapping alone (to store in a tree).
     pub fn into_calibration(self) -> Calibration {
         self.calibration
-    }
-}
-
-fn node_pair<'t>(
-    a: &'t AdbTree,
-    b: &'t AdbTree,
-    frame: &RelativeFrame,
-    ia: u32,
-    ib: u32,
-) -> NodePair<'t> {
-    let (x, y) = (
-        &a.collision_mesh().bvh().nodes()[ia as usize],
-        &b.collision_mesh().bvh().nodes()[ib as usize],
-    );
-    NodePair {
-        a: &a.nodes()[ia as usize],
-        b: &b.nodes()[ib as usize],
-        max_depth_a: a.max_depth(),
-        max_depth_b: b.max_depth(),
-        center_distance: frame.center_distance(x, y),
-        cells_a: a.cells_per_node(),
-        cells_b: b.cells_per_node(),
-        calibration_a: None,
-        calibration_b: None,
     }
 }
 

@@ -244,18 +244,8 @@ pub fn adb_intersects(
             triangles,
         }
     };
-    let pair_probability = |ia: u32, ib: u32, x: &BvhNode, y: &BvhNode| {
-        let pair = NodePair {
-            a: &a.nodes()[ia as usize],
-            b: &b.nodes()[ib as usize],
-            max_depth_a: a.max_depth(),
-            max_depth_b: b.max_depth(),
-            center_distance: frame.center_distance(x, y),
-            cells_a: a.cells_per_node(),
-            cells_b: b.cells_per_node(),
-            calibration_a: a.calibration(),
-            calibration_b: b.calibration(),
-        };
+    let pair_probability = |ia: u32, ib: u32| {
+        let pair = NodePair::between(a, b, &frame, ia, ib, true);
         query.estimator.probability(&pair).clamp(0.0, MAX_ESTIMATE)
     };
     // Σ ln(1 − p) over the frontier: the node pairs queued or left as leaves or pruned, which
@@ -270,6 +260,7 @@ pub fn adb_intersects(
     ws.exact.cache_begin(mb.mesh().vertex_count());
     'queue: while let Some(e) = ws.heap.pop() {
         pops += 1;
+
         let over = match query.budget {
             Budget::Unlimited => false,
             Budget::NodePairs(n) => out.node_pairs_visited >= n,
@@ -327,7 +318,7 @@ pub fn adb_intersects(
                 if !frame.overlap(cx, cy) {
                     continue;
                 }
-                let p = pair_probability(ia, ib, cx, cy);
+                let p = pair_probability(ia, ib);
                 if p > out.max_pair_probability {
                     out.max_pair_probability = p;
                 }
