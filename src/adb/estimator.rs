@@ -1,6 +1,6 @@
 //! Pluggable estimators of the probability that two nodes contain intersecting triangles.
 use super::fit::Calibration;
-use super::probability::{cell_counts, depth_lower_bound, overlap_volume};
+use super::probability::{cell_counts, depth_lower_bound, node_volume, overlap_volume};
 use super::tables::collision_probability_tabled;
 use super::tree::{AdbNode, AdbTree};
 use crate::bvh::box_test::RelativeFrame;
@@ -115,13 +115,12 @@ impl Default for PlanarityEstimator {
 #[inline]
 pub fn eq9_probability(pair: &NodePair<'_>, lb: f64, x_max: u32) -> f64 {
     let (a, b) = (pair.a, pair.b);
-    let volume = |s: &[f32; 3]| f64::from(s[0]) * f64::from(s[1]) * f64::from(s[2]);
     let v = overlap_volume(a.sides, b.sides, pair.center_distance);
     let cells = pair.cells_a.max(pair.cells_b);
     let counts = cell_counts(
         v,
-        volume(&a.sides),
-        volume(&b.sides),
+        node_volume(a.sides),
+        node_volume(b.sides),
         u32::from(a.well_filled),
         u32::from(b.well_filled),
         cells,

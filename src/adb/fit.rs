@@ -7,7 +7,7 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
 use super::estimator::{CollisionEstimator, NodePair};
-use super::tree::AdbTree;
+use super::tree::{AdbTree, nodes_overlap};
 use crate::bvh::QueryWorkspace;
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::traverse_pair::subtrees_intersect;
@@ -103,7 +103,7 @@ impl FittedEstimator {
                 let (mut ia, mut ib) = (0u32, 0u32);
                 loop {
                     let (x, y) = (&na[ia as usize], &nb[ib as usize]);
-                    if !frame.overlap(x, y) {
+                    if !nodes_overlap(a, b, &frame, ia, ib) {
                         break;
                     }
                     if (ia, ib) != (0, 0) {
@@ -131,7 +131,7 @@ impl FittedEstimator {
                     for u in children(x, ia) {
                         for v in children(y, ib) {
                             let fresh = !next[..count].contains(&(u, v));
-                            if fresh && frame.overlap(&na[u as usize], &nb[v as usize]) {
+                            if fresh && nodes_overlap(a, b, &frame, u, v) {
                                 next[count] = (u, v);
                                 count += 1;
                             }

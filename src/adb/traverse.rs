@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
-use super::tree::AdbTree;
+use super::tree::{AdbTree, nodes_overlap};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
 use crate::geometry::{Pose, triangles_intersect};
@@ -106,10 +106,11 @@ impl AdbQuery {
 /// An approximate contact region: where the most probable colliding node pair overlaps.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ContactWitness {
-    /// Approximate contact point (world space): between the two nodes' box centres.
+    /// Approximate contact point (world space): the probability-weighted centre of the leaf
+    /// pairs the traversal left in its frontier, or between the two nodes' box centres.
     pub point: Vec3,
     /// Approximate contact normal (world space, unit): the direction to push the second mesh
-    /// away from the first (from the two nodes' mean surface normals).
+    /// away from the first (from the nodes' mean surface normals, weighted like the point).
     pub normal: Vec3,
     /// The node pair (first tree, second tree).
     pub nodes: (u32, u32),
@@ -224,7 +225,7 @@ pub fn adb_intersects(
         max_pair_probability: 0.0,
         witness: None,
     };
-    if !frame.overlap(&na[0], &nb[0]) {
+    if !nodes_overlap(a, b, &frame, 0, 0) {
         return out;
     }
     let witness = |ia: u32, ib: u32, triangles: Option<TrianglePair>| {
@@ -253,7 +254,16 @@ pub fn adb_intersects(
     // pair collides is exp(this).
     let mut frontier_log_miss = 0.0f64;
     let mut frontier_len = 0usize;
-    let mut best: Option<(f64, u32, u32)> = None;
+    // The witness: the most probable pair, probabilities compared in steps of 1/20 and ties
+    // going to the deeper pair (whose boxes localise the contact better).
+    // Σ p·point, Σ p·normal, Σ p over the leaf pairs left in the frontier.
+    let mut region = (Vec3::ZERO, Vec3::ZERO, 0.0f64);
+    let mut best: Option<((u32, u32), u32, u32)> = None;
+    let witness_key = |p: f64, ia: u32, ib: u32| {
+        let depth =
+            u32::from(a.nodes()[ia as usize].depth) + u32::from(b.nodes()[ib as usize].depth);
+        ((p * 20.0) as u32, depth)
+    };
     let mut pops = 0u32;
     ws.heap.clear();
     ws.heap.push(Entry { p: 1.0, a: 0, b: 0 });
@@ -315,7 +325,7 @@ pub fn adb_intersects(
                 }
                 out.node_pairs_visited += 1;
                 let (cx, cy) = (&na[ia as usize], &nb[ib as usize]);
-                if !frame.overlap(cx, cy) {
+                if !nodes_overlap(a, b, &frame, ia, ib) {
                     continue;
                 }
                 let p = pair_probability(ia, ib);
@@ -324,8 +334,9 @@ pub fn adb_intersects(
                 }
                 frontier_log_miss += (1.0 - p).ln();
                 frontier_len += 1;
-                if best.is_none_or(|(bp, _, _)| p > bp) {
-                    best = Some((p, ia, ib));
+                let key = witness_key(p, ia, ib);
+                if p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
+                    best = Some((key, ia, ib));
                 }
                 if p >= query.p_min {
                     out.pairs_found += 1;
@@ -337,6 +348,12 @@ pub fn adb_intersects(
                 let both_leaves = cx.is_leaf() && cy.is_leaf();
                 if query.exact_leaves || (p > query.p_prune && !both_leaves) {
                     ws.heap.push(Entry { p, a: ia, b: ib });
+                } else if both_leaves && p > 0.0 {
+                    // A leaf pair stays in the frontier: it shapes the contact region.
+                    let w = witness(ia, ib, None);
+                    region.0 += w.point * p as f32;
+                    region.1 += w.normal * p as f32;
+                    region.2 += p;
                 }
             }
         }
@@ -356,7 +373,16 @@ pub fn adb_intersects(
         }
     }
     if out.witness.is_none() {
-        out.witness = best.map(|(_, ia, ib)| witness(ia, ib, None));
+        out.witness = best.map(|(_, ia, ib)| {
+            let mut w = witness(ia, ib, None);
+            // With leaf pairs in the frontier, the contact region is their probability-weighted
+            // centre and mean normal (the best pair's boxes may be large).
+            if region.2 > 0.0 {
+                w.point = region.0 / region.2 as f32;
+                w.normal = region.1.try_normalize().unwrap_or(w.normal);
+            }
+            w
+        });
     }
     out
 }

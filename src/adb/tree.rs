@@ -10,6 +10,7 @@ use super::cells::{CellGrid, CellScratch, count_well_filled};
 use super::estimator::PlanarityEstimator;
 use super::fit::{Calibration, FitOptions, FittedEstimator};
 use crate::bvh::CollisionMesh;
+use crate::bvh::box_test::RelativeFrame;
 use crate::geometry::Aabb;
 
 /// Options of [`AdbTree::build_with`].
@@ -68,6 +69,10 @@ pub struct AdbNode {
     pub planarity: f32,
     /// Area-weighted mean normal of the node's triangles (zero when they cancel out).
     pub normal: Vec3,
+    /// The slab `{p : slab[0] ≤ normal·p ≤ slab[1]}` that holds every triangle of the node
+    /// (infinite when the normal is zero): with the box, a tighter bounding volume, thin for
+    /// nearly flat patches, so near misses between flat patches are culled exactly.
+    pub slab: [f32; 2],
 }
 
 /// An ADB-tree (Klein & Zachmann 2003): a [`CollisionMesh`] whose BVH nodes also carry a tiny
@@ -144,9 +149,12 @@ impl AdbTree {
                     } else {
                         Vec3::ZERO
                     },
+                    slab: [f32::NEG_INFINITY, f32::INFINITY],
                 }
             })
             .collect();
+        let mut nodes: Vec<AdbNode> = nodes;
+        node_slabs(&mesh, &mut nodes);
         let mut tree = Self {
             mesh,
             nodes,
@@ -240,6 +248,63 @@ fn normal_sums(mesh: &CollisionMesh) -> (Vec<Vec3>, Vec<f32>) {
         }
     }
     (normals, areas)
+}
+
+/// The slab of every node along its mean normal: the extent of its vertices' projections,
+/// computed in `f64` and rounded outwards. Each subtree covers a contiguous range of the
+/// tree's leaf triangles.
+fn node_slabs(mesh: &CollisionMesh, nodes: &mut [AdbNode]) {
+    let bvh = mesh.bvh();
+    let tree = bvh.nodes();
+    let mut ranges = vec![(0u32, 0u32); tree.len()];
+    for i in (0..tree.len()).rev() {
+        let n = &tree[i];
+        ranges[i] = if n.is_leaf() {
+            (n.first, n.first + n.count)
+        } else {
+            let l = n.left() as usize;
+            (ranges[l].0, ranges[l + 1].1)
+        };
+    }
+    for (i, node) in nodes.iter_mut().enumerate() {
+        if node.normal == Vec3::ZERO {
+            continue;
+        }
+        let n = node.normal.as_dvec3();
+        let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+        let (start, end) = ranges[i];
+        for &t in &bvh.leaf_triangles()[start as usize..end as usize] {
+            for p in mesh.mesh().triangle(t as usize) {
+                let d = n.dot(p.as_dvec3());
+                lo = lo.min(d);
+                hi = hi.max(d);
+            }
+        }
+        // Round outwards so the f32 slab still holds every vertex.
+        node.slab = [(lo as f32).next_down(), (hi as f32).next_up()];
+    }
+}
+
+/// Whether nodes `ia` of `a` and `ib` of `b` may overlap: their boxes (six face axes) and each
+/// one's slab against the other's box. Conservative: never false for touching triangles.
+#[inline]
+pub(crate) fn nodes_overlap(
+    a: &AdbTree,
+    b: &AdbTree,
+    frame: &RelativeFrame,
+    ia: u32,
+    ib: u32,
+) -> bool {
+    let (x, y) = (
+        &a.collision_mesh().bvh().nodes()[ia as usize],
+        &b.collision_mesh().bvh().nodes()[ib as usize],
+    );
+    if !frame.overlap(x, y) {
+        return false;
+    }
+    let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
+    !frame.second_box_outside_slab(y, na.normal, na.slab[0], na.slab[1])
+        && !frame.first_box_outside_slab(x, nb.normal, nb.slab[0], nb.slab[1])
 }
 
 /// Well-filled cell count of every node, over all triangles in or crossing its box.

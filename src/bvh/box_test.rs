@@ -82,6 +82,27 @@ impl RelativeFrame {
         self.rot * p + self.translation
     }
 
+    /// Whether the box `b` (second frame) lies entirely outside the slab
+    /// `{p : lo ≤ n·p ≤ hi}` of the first frame (conservatively: never for a touching box).
+    #[inline]
+    pub(crate) fn second_box_outside_slab(&self, b: &BvhNode, n: Vec3, lo: f32, hi: f32) -> bool {
+        let c = self.rot * ((b.min + b.max) * 0.5) + self.translation;
+        let r = (self.rot_t * n).abs().dot((b.max - b.min) * 0.5);
+        let d = n.dot(c);
+        d - r > hi + self.margin || d + r < lo - self.margin
+    }
+
+    /// Whether the box `a` (first frame) lies entirely outside the slab
+    /// `{p : lo ≤ n·p ≤ hi}` of the second frame (conservatively).
+    #[inline]
+    pub(crate) fn first_box_outside_slab(&self, a: &BvhNode, n: Vec3, lo: f32, hi: f32) -> bool {
+        // p_b = Rᵀ (p_a − t), so n·p_b = (R n)·p_a − (R n)·t.
+        let m = self.rot * n;
+        let r = m.abs().dot((a.max - a.min) * 0.5);
+        let d = m.dot((a.min + a.max) * 0.5) - m.dot(self.translation);
+        d - r > hi + self.margin || d + r < lo - self.margin
+    }
+
     /// A lower bound on the distance between the boxes (largest gap along the six axes).
     #[inline]
     pub(crate) fn distance_lower_bound(&self, a: &BvhNode, b: &BvhNode) -> f32 {
