@@ -27,7 +27,7 @@ pub use estimator::{
 };
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
 pub use traverse::{
-    AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, MAX_ESTIMATE,
-    TIME_CHECK_INTERVAL, adb_intersects,
+    AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, EVIDENCE_REDUNDANCY,
+    MAX_ESTIMATE, TIME_CHECK_INTERVAL, adb_intersects,
 };
 pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};
