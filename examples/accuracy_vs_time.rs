@@ -589,8 +589,14 @@ fn plot_error_vs_time(
         let records = &all[name];
         let exact = stats(records, |r| r.exact);
         // In sweep order: the time budgets ascending, then no budget.
-        let budgets = configs.iter().enumerate().filter(|(_, c)| c.family == "time budget");
-        let unbudgeted = configs.iter().enumerate().filter(|(_, c)| c.label == DEFAULT_LABEL);
+        let budgets = configs
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.family == "time budget");
+        let unbudgeted = configs
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.label == DEFAULT_LABEL);
         let pts: Vec<(f64, f64)> = budgets
             .chain(unbudgeted)
             .map(|(k, _)| {
