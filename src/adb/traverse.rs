@@ -263,9 +263,6 @@ pub fn adb_intersects(
         let pair = NodePair::between(a, b, &frame, ia, ib, true);
         query.estimator.probability(&pair).clamp(0.0, MAX_ESTIMATE)
     };
-    // Σ ln(1 − p) over the frontier: the node pairs queued or left as leaves or pruned, which
-    // together cover every overlapping leaf pair. Under independence, the probability that no
-    // pair collides is exp(this).
     // Which pairs count toward k_min: the papers count every pair with p ≥ p_min; the
     // confidence decision counts disjoint frontier pairs with p ≥ 1 − (1 − p_min)^(r/k_min),
     // so that k_min of them, worth k_min/r independent pieces of evidence, reach p_min.
@@ -276,12 +273,15 @@ pub fn adb_intersects(
     } else {
         query.p_min
     };
+    // Σ ln(1 − p) over the frontier: the node pairs queued or left as leaves or pruned, which
+    // together cover every overlapping leaf pair. Under independence, the probability that no
+    // pair collides is exp(this).
     let mut frontier_log_miss = 0.0f64;
     let mut frontier_len = 0usize;
-    // The witness: the most probable pair, probabilities compared in steps of 1/20 and ties
-    // going to the deeper pair (whose boxes localise the contact better).
-    // Σ p·point, Σ p·normal, Σ p over the leaf pairs left in the frontier.
+    // Σ p·point, Σ p·normal, Σ p over the leaf pairs left in the frontier: the contact region.
     let mut region = (Vec3::ZERO, Vec3::ZERO, 0.0f64);
+    // The most probable pair, probabilities compared in steps of 1/20 and ties going to the
+    // deeper pair (whose boxes localise the contact better).
     let mut best: Option<((u32, u32), u32, u32)> = None;
     let witness_key = |p: f64, ia: u32, ib: u32| {
         let depth =
@@ -291,10 +291,11 @@ pub fn adb_intersects(
     let mut pops = 0u32;
     ws.heap.clear();
     ws.heap.push(Entry { p: 1.0, a: 0, b: 0 });
-    ws.exact.cache_begin(mb.mesh().vertex_count());
+    if query.exact_leaves {
+        ws.exact.cache_begin(mb.mesh().vertex_count());
+    }
     'queue: while let Some(e) = ws.heap.pop() {
         pops += 1;
-
         let over = match query.budget {
             Budget::Unlimited => false,
             Budget::NodePairs(n) => out.node_pairs_visited >= n,

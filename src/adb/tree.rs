@@ -128,7 +128,7 @@ impl AdbTree {
             options.threads,
             progress,
         );
-        let nodes = (0..n)
+        let mut nodes: Vec<AdbNode> = (0..n)
             .map(|i| {
                 let node = &bvh.nodes()[i];
                 let mut sides = (node.max - node.min).to_array();
@@ -153,7 +153,6 @@ impl AdbTree {
                 }
             })
             .collect();
-        let mut nodes: Vec<AdbNode> = nodes;
         node_slabs(&mesh, &mut nodes);
         let mut tree = Self {
             mesh,
