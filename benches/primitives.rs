@@ -1,5 +1,6 @@
 //! The exact triangle–triangle test and triangle–triangle closest points, on random pairs
-//! (about half of them intersecting) and on touching and coplanar pairs.
+//! (overlapping boxes: about a quarter intersect; and far apart) and on touching and coplanar
+//! pairs.
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -24,7 +25,7 @@ fn random_pairs(n: usize, spread: f64) -> Vec<([DVec3; 3], [DVec3; 3])> {
 
 fn bench(c: &mut Criterion) {
     let mut group = c.benchmark_group("triangles_intersect");
-    for (name, spread) in [("random_mixed", 0.8), ("mostly_apart", 2.5)] {
+    for (name, spread) in [("random_mixed", 0.0), ("mostly_apart", 2.5)] {
         let pairs = random_pairs(1024, spread);
         let hits = pairs
             .iter()
