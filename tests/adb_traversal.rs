@@ -182,3 +182,51 @@ fn clear_cases_are_answered_right() {
         "{paper:?}"
     );
 }
+
+/// Hard inputs: a single triangle, zero-area triangles only, a flat cloth (flat node boxes), the
+/// ogre with its degenerate triangles: every node value finite, every answer a probability.
+#[test]
+fn hard_meshes_build_finite_trees_and_answer_probabilities() {
+    use glam::Vec3;
+    use stochastic_collision::mesh::TriMesh;
+    let single = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+    let degenerate = TriMesh::new(
+        vec![Vec3::ZERO, Vec3::X, Vec3::X * 2.0, Vec3::Y],
+        vec![[0, 1, 2], [3, 3, 3], [0, 0, 1]],
+    )
+    .unwrap();
+    let mut meshes = vec![single, degenerate, generate::cloth_grid(1.0, 1.0, 16, 16)];
+    if let Some(path) = common_mesh("ogre.obj") {
+        meshes.push(TriMesh::from_obj(path).unwrap());
+    }
+    let mut ws = AdbWorkspace::new();
+    for mesh in meshes {
+        let tree = AdbTree::new(CollisionMesh::new(mesh));
+        for n in tree.nodes() {
+            assert!(n.planarity.is_finite() && (0.0..=1.0).contains(&n.planarity));
+            assert!(n.normal.is_finite() && n.sides.iter().all(|s| s.is_finite()));
+            assert!(!n.slab[0].is_nan() && !n.slab[1].is_nan() && n.slab[0] <= n.slab[1]);
+        }
+        let size = tree.collision_mesh().bvh().root_aabb().extents().length();
+        for k in 0..12 {
+            let t = k as f32 / 12.0;
+            let pose = Pose::new(
+                Vec3::new(t - 0.5, 0.3 * t, 0.1) * size,
+                glam::Quat::from_rotation_y(t * 3.0),
+            );
+            for query in [AdbQuery::default(), AdbQuery::paper()] {
+                let o = adb_intersects(&tree, &Pose::IDENTITY, &tree, &pose, &query, &mut ws);
+                assert!((0.0..=1.0).contains(&o.probability), "{o:?}");
+                if let Some(w) = o.witness {
+                    assert!(w.point.is_finite() && w.normal.is_finite());
+                }
+            }
+        }
+    }
+}
+
+mod common;
+
+fn common_mesh(file: &str) -> Option<std::path::PathBuf> {
+    common::shared_mesh(file)
+}

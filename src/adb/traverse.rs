@@ -291,9 +291,8 @@ pub fn adb_intersects(
     let mut pops = 0u32;
     ws.heap.clear();
     ws.heap.push(Entry { p: 1.0, a: 0, b: 0 });
-    if query.exact_leaves {
-        ws.exact.cache_begin(mb.mesh().vertex_count());
-    }
+    // Leaf pairs are tested exactly in exact-leaves mode, and so is a root pair of two leaves.
+    ws.exact.cache_begin(mb.mesh().vertex_count());
     'queue: while let Some(e) = ws.heap.pop() {
         pops += 1;
         let over = match query.budget {
@@ -316,7 +315,7 @@ pub fn adb_intersects(
         }
         let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
         if x.is_leaf() && y.is_leaf() {
-            // Only queued in exact-leaves mode: decide the pair exactly.
+            // Queued in exact-leaves mode (or the root pair of two single-leaf trees): decide exactly.
             for &t in ma.bvh().triangles_of(x) {
                 let tri_a = ma.mesh().triangle(t as usize).map(|p| p.as_dvec3());
                 for &u in mb.bvh().triangles_of(y) {
