@@ -20,6 +20,7 @@
 //!
 //! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value)
 //! exits with code 2 and one line on stderr naming the file and line.
+use std::ffi::OsString;
 use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -61,7 +62,7 @@ struct Row {
     nodes_visited: u64,
 }
 
-fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
+fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
     let (mut a, mut b, mut poses, mut out, mut mode) = (None, None, None, None, None);
     let mut solid = false;
     let mut adb = AdbQuery::default();
@@ -69,15 +70,20 @@ fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
     let mut adb_flags: Vec<&'static str> = Vec::new();
     let mut budget_flags = 0;
     while let Some(flag) = it.next() {
-        let mut value = |name: &str| {
+        let flag = flag
+            .into_string()
+            .map_err(|f| format!("unknown argument `{}`; {USAGE}", f.to_string_lossy()))?;
+        // Paths may be any OS string; other values must be text.
+        let mut next = |name: &str| {
             it.next()
                 .ok_or_else(|| format!("{name} needs a value; {USAGE}"))
         };
+        let mut value = |name: &str| next(name).and_then(|v| text(v, name));
         match flag.as_str() {
-            "--a" => a = Some(PathBuf::from(value("--a")?)),
-            "--b" => b = Some(PathBuf::from(value("--b")?)),
-            "--poses" => poses = Some(PathBuf::from(value("--poses")?)),
-            "--out" => out = Some(PathBuf::from(value("--out")?)),
+            "--a" => a = Some(PathBuf::from(next("--a")?)),
+            "--b" => b = Some(PathBuf::from(next("--b")?)),
+            "--poses" => poses = Some(PathBuf::from(next("--poses")?)),
+            "--out" => out = Some(PathBuf::from(next("--out")?)),
             "--mode" => mode = Some(value("--mode")?),
             "--solid" => solid = true,
             "--p-min" => {
@@ -91,10 +97,12 @@ fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
                 adb_flags.push("--k-min");
             }
             "--budget-us" => {
-                let us: f64 = parse_number(&value("--budget-us")?, "--budget-us", |t: f64| {
-                    t > 0.0 && t.is_finite()
-                })?;
-                adb.budget = Budget::Time(Duration::from_secs_f64(us * 1e-6));
+                let text = value("--budget-us")?;
+                let us: f64 =
+                    parse_number(&text, "--budget-us", |t: f64| t > 0.0 && t.is_finite())?;
+                let budget = Duration::try_from_secs_f64(us * 1e-6)
+                    .map_err(|_| format!("--budget-us: invalid value `{text}` (too large)"))?;
+                adb.budget = Budget::Time(budget);
                 budget_flags += 1;
                 adb_flags.push("--budget-us");
             }
@@ -168,6 +176,13 @@ fn parse_args(mut it: impl Iterator<Item = String>) -> Result<Args, String> {
         out,
         mode,
     })
+}
+
+/// A flag's value as text.
+fn text(value: OsString, flag: &str) -> Result<String, String> {
+    value
+        .into_string()
+        .map_err(|v| format!("{flag}: invalid value `{}`", v.to_string_lossy()))
 }
 
 /// Parses a flag's value and checks its range.
@@ -259,7 +274,7 @@ fn run(args: Args) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    match parse_args(std::env::args().skip(1)).and_then(run) {
+    match parse_args(std::env::args_os().skip(1)).and_then(run) {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
             eprintln!("error: {message}");

@@ -230,3 +230,32 @@ mod common;
 fn common_mesh(file: &str) -> Option<std::path::PathBuf> {
     common::shared_mesh(file)
 }
+
+/// A budget never ends a query before the root pair is expanded: one triangle against itself
+/// with a budget of one node pair is still found colliding (its root is a leaf pair, tested
+/// exactly).
+#[test]
+fn a_budget_never_answers_before_looking() {
+    use glam::Vec3;
+    use stochastic_collision::mesh::TriMesh;
+    let tri = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+    let tree = AdbTree::new(CollisionMesh::new(tri));
+    let mut ws = AdbWorkspace::new();
+    for query in [
+        AdbQuery::with_budget(Budget::NodePairs(1)),
+        AdbQuery {
+            budget: Budget::NodePairs(1),
+            ..AdbQuery::paper()
+        },
+    ] {
+        let o = adb_intersects(
+            &tree,
+            &Pose::IDENTITY,
+            &tree,
+            &Pose::IDENTITY,
+            &query,
+            &mut ws,
+        );
+        assert!(o.collides && o.probability == 1.0, "{o:?}");
+    }
+}

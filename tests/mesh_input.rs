@@ -30,7 +30,12 @@ fn expect_malformed(result: Result<TriMesh, MeshError>, line: usize, words: &[&s
         assert!(message.contains(w), "message lacks {w:?}: {err}");
     }
     let shown = err.to_string();
-    assert!(shown.starts_with(&format!("mesh.obj:{line}: ")), "{shown}");
+    let prefix = if line == 0 {
+        "mesh.obj: ".to_string()
+    } else {
+        format!("mesh.obj:{line}: ")
+    };
+    assert!(shown.starts_with(&prefix), "{shown}");
     shown
 }
 

@@ -373,4 +373,32 @@ fn adb_flag_errors_exit_2() {
         &with(&["--mode", "exact", "--p-min", "0.5"]),
         "--p-min applies to --mode adb only",
     );
+    rejects(
+        &with(&["--mode", "adb", "--budget-us", "1e30"]),
+        "--budget-us: invalid value `1e30`",
+    );
+    #[cfg(unix)]
+    {
+        use std::ffi::OsStr;
+        use std::os::unix::ffi::OsStrExt;
+        // A path that is not UTF-8 is still a path: refused because the file does not exist.
+        let out = Command::new(query_exe())
+            .arg("--a")
+            .arg(OsStr::from_bytes(b"/tmp/no-such-\xff.obj"))
+            .args(["--b", m, "--poses", p, "--mode", "exact"])
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-"));
+        // A flag value that is not UTF-8 is refused cleanly.
+        let out = Command::new(query_exe())
+            .args(["--a", m, "--b", m, "--poses", p, "--mode"])
+            .arg(OsStr::from_bytes(b"ad\xffb"))
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(2));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(err.contains("--mode: invalid value"), "{err}");
+    }
 }

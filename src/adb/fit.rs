@@ -64,11 +64,19 @@ pub struct Calibration {
 impl Calibration {
     /// The calibrated probability of a raw estimate for this pair.
     #[inline]
+    /// Depth buckets the fit never sampled (possible for pairs of two different trees) keep the
+    /// raw estimate.
     pub fn map(&self, pair: &NodePair<'_>, raw: f64) -> f64 {
-        f64::from(self.table[bucket(pair)][raw_bin(raw.clamp(0.0, 1.0))])
+        let raw = raw.clamp(0.0, 1.0);
+        let fitted = self.table[bucket(pair)][raw_bin(raw)];
+        if fitted.is_nan() {
+            raw
+        } else {
+            f64::from(fitted)
+        }
     }
 
-    /// The table: `[depth bucket][raw-probability bin]` → probability.
+    /// The table: `[depth bucket][raw-probability bin]` → probability (NaN: no samples).
     pub fn table(&self) -> &[[f32; RAW_BINS]; DEPTH_BUCKETS] {
         &self.table
     }
@@ -205,8 +213,11 @@ fn monotone_rates(cells: &[(u32, u32); RAW_BINS]) -> [f32; RAW_BINS] {
             *v = rate as f32;
         }
     }
-    // Fill empty bins: from the left neighbour, else the right one, else the prior mean.
-    let first = out.iter().copied().find(|v| !v.is_nan()).unwrap_or(0.5);
+    // Fill empty bins: from the left neighbour, else the right one. A row with no samples at
+    // all stays NaN, and `Calibration::map` then returns the raw estimate unchanged.
+    let Some(first) = out.iter().copied().find(|v| !v.is_nan()) else {
+        return out;
+    };
     let mut last = first;
     for v in &mut out {
         if v.is_nan() {

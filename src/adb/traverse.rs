@@ -18,7 +18,9 @@ pub enum Budget {
     /// No limit: stop only on the `p_min`/`k_min` rule or an empty queue.
     #[default]
     Unlimited,
-    /// Stop after this many node pairs have been visited (deterministic, run to run).
+    /// Stop once about this many node pairs have been visited (checked before each expansion,
+    /// which visits up to 4: at most 3 more; deterministic, run to run). The root pair is
+    /// always expanded.
     NodePairs(u64),
     /// Stop once this much time has passed since the query started (checked every
     /// [`TIME_CHECK_INTERVAL`] queue pops, so the check costs nothing measurable).
@@ -261,7 +263,13 @@ pub fn adb_intersects(
     };
     let pair_probability = |ia: u32, ib: u32| {
         let pair = NodePair::between(a, b, &frame, ia, ib, true);
-        query.estimator.probability(&pair).clamp(0.0, MAX_ESTIMATE)
+        let p = query.estimator.probability(&pair);
+        // A NaN from a custom estimator counts as 0 rather than poisoning the confidence.
+        if p.is_nan() {
+            0.0
+        } else {
+            p.clamp(0.0, MAX_ESTIMATE)
+        }
     };
     // Which pairs count toward k_min: the papers count every pair with p ≥ p_min; the
     // confidence decision counts disjoint frontier pairs with p ≥ 1 − (1 − p_min)^(r/k_min),
@@ -295,11 +303,13 @@ pub fn adb_intersects(
     ws.exact.cache_begin(mb.mesh().vertex_count());
     'queue: while let Some(e) = ws.heap.pop() {
         pops += 1;
-        let over = match query.budget {
-            Budget::Unlimited => false,
-            Budget::NodePairs(n) => out.node_pairs_visited >= n,
-            Budget::Time(t) => pops.is_multiple_of(TIME_CHECK_INTERVAL) && start.elapsed() >= t,
-        };
+        // The root pair is always expanded: a budget cannot end a query before it has looked.
+        let over = pops > 1
+            && match query.budget {
+                Budget::Unlimited => false,
+                Budget::NodePairs(n) => out.node_pairs_visited >= n,
+                Budget::Time(t) => pops.is_multiple_of(TIME_CHECK_INTERVAL) && start.elapsed() >= t,
+            };
         if over {
             out.budget_exhausted = true;
             ws.heap.push(e);

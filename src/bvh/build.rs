@@ -16,8 +16,9 @@ pub struct BvhBuildOptions {
     /// centroids (`false`, the default: about twice as fast to build, and the trees answer
     /// mesh–mesh queries as fast, as the `exact_vs_parry` bench shows).
     pub all_axes: bool,
-    /// Build subtrees of at least this many triangles on separate threads (`usize::MAX`: never).
-    /// Threads are only used when the machine has more than one core.
+    /// Build subtrees of at least this many triangles on separate threads (`usize::MAX`: never;
+    /// values below 1024 count as 1024, where a thread costs more than it saves). Threads are
+    /// only used when the machine has more than one core.
     pub parallel_threshold: usize,
 }
 

@@ -6,7 +6,7 @@ use smallvec::{SmallVec, smallvec};
 use super::collision_mesh::CollisionMesh;
 use super::workspace::triangle_f64;
 use crate::geometry::predicates::orient3d;
-use crate::geometry::{Pose, triangles_intersect};
+use crate::geometry::{PoseF64, triangles_intersect};
 
 /// Whether `point` (in `mesh`'s own frame) is inside or on the closed mesh `mesh`.
 ///
@@ -28,22 +28,21 @@ pub fn contains_point(mesh: &CollisionMesh, point: Vec3) -> bool {
     mesh.is_closed() && contains_point_f64(mesh, point.as_dvec3())
 }
 
-/// Whether every connected component of `inner`, placed in `outer`'s frame by `inner_to_outer`,
-/// has a vertex inside the closed mesh `outer`. Called only when the surfaces do not touch, so
-/// one vertex per component decides for the whole component.
+/// Whether some connected component of `inner`, placed in `outer`'s frame by `inner_to_outer`,
+/// lies inside the closed mesh `outer`. Called only when the surfaces do not touch, so one
+/// vertex per component decides for the whole component.
 pub(crate) fn contained_in(
     inner: &CollisionMesh,
     outer: &CollisionMesh,
-    inner_to_outer: &Pose,
+    inner_to_outer: &PoseF64,
 ) -> bool {
     if !outer.is_closed() {
         return false;
     }
-    let pose = inner_to_outer.to_f64();
     let positions = inner.mesh().positions();
     let root = outer.bvh().root_aabb();
     inner.component_vertices().iter().any(|&v| {
-        let p = pose.transform_point(positions[v as usize]);
+        let p = inner_to_outer.transform_point(positions[v as usize]);
         let inside_box = p.cmpge(root.min.as_dvec3()).all() && p.cmple(root.max.as_dvec3()).all();
         inside_box && contains_point_f64(outer, p)
     })

@@ -70,7 +70,7 @@ pub fn intersects_with(
         witness = Some(pair);
         ControlFlow::Break(())
     });
-    let rel = pose_a.inverse_mul(pose_b);
+    let rel = pose_a.inverse_mul(pose_b).to_f64();
     let contained = witness.is_none()
         && options.solid
         && (contained_in(b, a, &rel) || contained_in(a, b, &rel.inverse()));

@@ -101,6 +101,16 @@ pub struct PoseF64 {
 }
 
 impl PoseF64 {
+    /// The inverse transform, computed in `f64`.
+    #[inline]
+    pub fn inverse(&self) -> PoseF64 {
+        let r = self.rotation.inverse();
+        PoseF64 {
+            rotation: r,
+            translation: -(r * self.translation),
+        }
+    }
+
     /// Applies the pose to a point.
     #[inline]
     pub fn transform_point(&self, p: Vec3) -> DVec3 {

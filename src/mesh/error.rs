@@ -1,4 +1,4 @@
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Why a mesh could not be built or loaded. Every variant names what is wrong and where.
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
@@ -56,7 +56,7 @@ pub enum MeshError {
         message: String,
     },
     /// The file was read but is not a valid OBJ mesh.
-    #[error("{path}:{line}: {message}")]
+    #[error("{}: {message}", located(path, *line))]
     Malformed {
         /// The file.
         path: PathBuf,
@@ -65,4 +65,13 @@ pub enum MeshError {
         /// What is wrong.
         message: String,
     },
+}
+
+/// `file:line`, or just `file` when the problem is not tied to one line (line 0).
+fn located(path: &Path, line: usize) -> String {
+    if line == 0 {
+        path.display().to_string()
+    } else {
+        format!("{}:{line}", path.display())
+    }
 }
