@@ -3,11 +3,12 @@
 //! Time-critical, approximate collision detection for triangle meshes, rigid and deformable,
 //! for Bevy games and simulations.
 //!
-//! This crate trades accuracy for time, on purpose and measurably. Its foundation, documented
-//! here, is an **exact** baseline: validated triangle meshes ([`mesh::TriMesh`]), robust
-//! primitives ([`geometry`]), and a bounding-volume hierarchy ([`bvh::CollisionMesh`]) that answers
-//! "do these two meshes touch?", "which triangle pairs intersect?", "how far apart are they?"
-//! and "does this mesh intersect itself?".
+//! This crate trades accuracy for time, on purpose and measurably. Its foundation is an
+//! **exact** baseline: validated triangle meshes ([`mesh::TriMesh`]), robust primitives
+//! ([`geometry`]), and a bounding-volume hierarchy ([`bvh::CollisionMesh`]) that answers "do
+//! these two meshes touch?", "which triangle pairs intersect?", "how far apart are they?" and
+//! "does this mesh intersect itself?". On top of it, ADB-trees ([`adb`]) answer "do they
+//! collide?" with a confidence, inside a node-pair or time budget.
 //!
 //! ```
 //! use stochastic_collision::prelude::*;
@@ -21,10 +22,18 @@
 //! assert!(!intersects(&ball, &Pose::IDENTITY, &ball, &far, &mut ws));
 //! let gap = closest_points(&ball, &Pose::IDENTITY, &ball, &far, f32::INFINITY, &mut ws).unwrap();
 //! assert!((gap.distance - 0.5).abs() < 0.05);
+//!
+//! // Time-critical: an ADB-tree (built once per mesh), a 20 µs budget, a confidence.
+//! let tree = AdbTree::new(ball.clone());
+//! let mut adb_ws = AdbWorkspace::new();
+//! let query = AdbQuery::with_budget(Budget::Time(std::time::Duration::from_micros(20)));
+//! let out = adb_intersects(&tree, &Pose::IDENTITY, &tree, &near, &query, &mut adb_ws);
+//! assert!(out.collides && out.probability > 0.5);
 //! ```
 //!
-//! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them. None of them imports
-//! Bevy; the engine integration lives in its own layer.
+//! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them, `adb` on top of `bvh`;
+//! `poses` generates benchmark scenarios. None of them imports Bevy; the engine integration
+//! will live in its own layer.
 #![warn(missing_docs)]
 
 pub mod adb;
@@ -35,6 +44,7 @@ pub mod poses;
 
 /// The types most programs need, in one import.
 pub mod prelude {
+    pub use crate::adb::{AdbOutcome, AdbQuery, AdbTree, AdbWorkspace, Budget, adb_intersects};
     pub use crate::bvh::{
         Bvh, CollisionMesh, ExactOptions, ExactOutcome, MeshDistance, QueryWorkspace, TrianglePair,
         closest_points, intersecting_pairs, intersects, intersects_with, self_intersections,
