@@ -23,10 +23,11 @@
 //! let gap = closest_points(&ball, &Pose::IDENTITY, &ball, &far, f32::INFINITY, &mut ws).unwrap();
 //! assert!((gap.distance - 0.5).abs() < 0.05);
 //!
-//! // Time-critical: an ADB-tree (built once per mesh), a 20 µs budget, a confidence.
+//! // Time-critical: an ADB-tree (built once per mesh), a budget (here 200 node pairs, which is
+//! // deterministic; `Budget::Time` bounds the wall-clock time instead), a confidence.
 //! let tree = AdbTree::new(ball.clone());
 //! let mut adb_ws = AdbWorkspace::new();
-//! let query = AdbQuery::with_budget(Budget::Time(std::time::Duration::from_micros(20)));
+//! let query = AdbQuery::with_budget(Budget::NodePairs(200));
 //! let out = adb_intersects(&tree, &Pose::IDENTITY, &tree, &near, &query, &mut adb_ws);
 //! assert!(out.collides && out.probability > 0.5);
 //! ```
