@@ -22,6 +22,8 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
+use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
     AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, PlanarityEstimator,
@@ -626,26 +628,14 @@ fn plot_error_vs_time(
         .draw()?;
     for (i, (name, pts, exact_us)) in curves.into_iter().enumerate() {
         let color = palette(i);
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
-            .label(name)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-            });
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+        draw_curve(&mut chart, &pts, name, color, 3)?;
         chart.draw_series(std::iter::once(TriangleMarker::new(
             (exact_us, 0.0),
             6,
             color.filled(),
         )))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
+    finish(&mut chart, &root)
 }
 
 /// Error % of the default configuration against the offset from first contact.
@@ -701,22 +691,9 @@ fn plot_error_vs_distance(
         .y_desc("error (%)")
         .draw()?;
     for (i, (name, pts)) in curves.into_iter().enumerate() {
-        let color = palette(i);
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
-            .label(name)
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-            });
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+        draw_curve(&mut chart, &pts, name, palette(i), 3)?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()?;
-    root.present()?;
-    Ok(())
+    finish(&mut chart, &root)
 }
 
 /// Reliability curve: observed collision frequency against reported probability (10 bins),
@@ -794,18 +771,39 @@ fn plot_reliability(
             brier.0 / brier.1.max(1) as f64,
             line.join(", ")
         );
-        let color = palette(i);
-        chart
-            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
-            .label(format!(
-                "{label} (Brier {:.3})",
-                brier.0 / brier.1.max(1) as f64
-            ))
-            .legend(move |(x, y)| {
-                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
-            });
-        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, color.filled())))?;
+        let name = format!("{label} (Brier {:.3})", brier.0 / brier.1.max(1) as f64);
+        draw_curve(&mut chart, &pts, name, palette(i), 4)?;
     }
+    finish(&mut chart, &root)
+}
+
+/// One labelled curve with its points marked.
+fn draw_curve<'a, X>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    pts: &[(f64, f64)],
+    label: String,
+    color: RGBColor,
+    radius: u32,
+) -> Result<(), Box<dyn std::error::Error>>
+where
+    X: Ranged<ValueType = f64>,
+{
+    chart
+        .draw_series(LineSeries::new(pts.to_vec(), color.stroke_width(2)))?
+        .label(label)
+        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2)));
+    chart.draw_series(pts.iter().map(|&p| Circle::new(p, radius, color.filled())))?;
+    Ok(())
+}
+
+/// The legend box, then the file.
+fn finish<'a, X>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    root: &DrawingArea<SVGBackend<'a>, Shift>,
+) -> Result<(), Box<dyn std::error::Error>>
+where
+    X: Ranged<ValueType = f64>,
+{
     chart
         .configure_series_labels()
         .background_style(WHITE.mix(0.8))

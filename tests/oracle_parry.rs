@@ -173,14 +173,7 @@ fn fine_spheres_near_tangency_agree_with_parry_or_prove_it_wrong() {
 /// parry reports collisions that are not there: each disagreement must come with the proof.
 #[test]
 fn bench_poses_agree_with_parry_or_prove_it_wrong() {
-    for f in [
-        "bunny.obj",
-        "armadillo.obj",
-        "dragon_50k.obj",
-        "stanford-bunny.obj",
-        "small_intestine_100k.obj",
-        "ogre.obj",
-    ] {
+    for f in common::QUERY_MESHES {
         if let Some(m) = shared(f) {
             agree_with_parry_spread(f, &m, &m, 48, 0.02, 0x5eed);
         }

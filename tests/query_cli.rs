@@ -133,14 +133,7 @@ fn exact_mode_agrees_with_parry_on_generated_meshes() {
 
 #[test]
 fn exact_mode_agrees_with_parry_on_every_shared_mesh() {
-    for file in [
-        "bunny.obj",
-        "armadillo.obj",
-        "dragon_50k.obj",
-        "stanford-bunny.obj",
-        "small_intestine_100k.obj",
-        "ogre.obj",
-    ] {
+    for file in common::QUERY_MESHES {
         if let Some(path) = common::shared_mesh(file) {
             check_against_parry(&path, 6, file.trim_end_matches(".obj"));
         }

@@ -3,6 +3,17 @@
 
 use std::path::PathBuf;
 
+/// The shared meshes the exact-query and ADB issues name for checks against parry and for
+/// the benchmarks, smallest first.
+pub const QUERY_MESHES: [&str; 6] = [
+    "bunny.obj",
+    "armadillo.obj",
+    "dragon_50k.obj",
+    "stanford-bunny.obj",
+    "small_intestine_100k.obj",
+    "ogre.obj",
+];
+
 /// Environment variable that turns a missing shared mesh into a test failure (set by `.ci/run`).
 pub const REQUIRE_SHARED: &str = "STOCHASTIC_COLLISION_REQUIRE_SHARED_MESHES";
 
