@@ -298,19 +298,6 @@ fn curvature_bounds() {
         1.0
     );
     assert_eq!(depth_lower_bound(9, 9, 1, 1), 1.0);
-    assert_eq!(DepthRatio.lb(2, 3, 5, 5), depth_lower_bound(2, 3, 5, 5));
-
-    let t = PerDepthTable::new(vec![0.1, -3.0, 2.0, f64::NAN, f64::INFINITY]);
-    assert_eq!(t.values()[..3], [0.1, 0.0, 1.0]);
-    assert_eq!(t.lb(0, 0, 4, 4), 0.1);
-    assert_eq!(t.lb(1, 0, 4, 4), 0.0);
-    assert_eq!(t.lb(1, 1, 4, 4), 1.0);
-    assert_eq!(t.lb(2, 1, 4, 4), depth_lower_bound(2, 1, 4, 4)); // NaN: not fitted
-    assert_eq!(t.lb(2, 2, 4, 4), 1.0);
-    assert_eq!(t.lb(3, 2, 4, 4), depth_lower_bound(3, 2, 4, 4)); // outside the table
-    assert_eq!(t.lb(u32::MAX, u32::MAX, 4, 4), 1.0);
-    let boxed: Box<dyn CurvatureBound> = Box::new(t);
-    assert_eq!(boxed.lb(0, 0, 1, 1), 0.1);
 }
 
 #[test]
@@ -669,7 +656,7 @@ fn end_to_end_pipeline_stays_in_range() {
         let c = cell_counts(v, vol, vol, 24, 30, 64);
         assert!(c.s <= prev_s);
         prev_s = c.s;
-        p = collision_probability_tabled(c, DepthRatio.lb(6, 7, 10, 10), DEFAULT_X_MAX);
+        p = collision_probability_tabled(c, depth_lower_bound(6, 7, 10, 10), DEFAULT_X_MAX);
         assert!((0.0..=1.0).contains(&p));
     }
     assert_eq!(p, 0.0);

@@ -18,9 +18,6 @@ pub struct NodePair<'a> {
     pub max_depth_b: u32,
     /// Distance between the two boxes' centres.
     pub center_distance: f32,
-    /// How deeply the two boxes interpenetrate along their best separating face axis, relative
-    /// to the smaller box's largest half extent (0 when they only touch).
-    pub penetration: f32,
     /// Cells per node of the first tree's grids.
     pub cells_a: u32,
     /// Cells per node of the second tree's grids.
@@ -45,23 +42,13 @@ impl<'a> NodePair<'a> {
             &a.collision_mesh().bvh().nodes()[ia as usize],
             &b.collision_mesh().bvh().nodes()[ib as usize],
         );
-        let (center_distance, separation) = frame.center_distance_and_separation(x, y);
-        let scale = (x.max - x.min)
-            .max_element()
-            .min((y.max - y.min).max_element())
-            * 0.5;
-        let penetration = if scale > 0.0 {
-            (-separation / scale).max(0.0)
-        } else {
-            0.0
-        };
+        let center_distance = frame.center_distance(x, y);
         NodePair {
             a: &a.nodes()[ia as usize],
             b: &b.nodes()[ib as usize],
             max_depth_a: a.max_depth(),
             max_depth_b: b.max_depth(),
             center_distance,
-            penetration,
             cells_a: a.cells_per_node(),
             cells_b: b.cells_per_node(),
             calibration_a: if calibrated { a.calibration() } else { None },

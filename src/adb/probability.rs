@@ -9,7 +9,8 @@
 //!    which `s_A` are possible collision cells of `A` and `s_B` of `B`.
 //! 3. [`prob_at_least`] (Eq. 8): `Pr[c(A∩B) ≥ x]`, the hypergeometric upper tail.
 //! 4. [`collision_probability`] (Eq. 9): `max_x Pr[c ≥ x] · (1 − (1 − LB)^x)`, with the
-//!    curvature term `LB` from a [`CurvatureBound`] ([`DepthRatio`] is the paper's).
+//!    curvature term `LB` ([`depth_lower_bound`] is the paper's; the estimators in
+//!    [`crate::adb`] supply others).
 //!
 //! For the traversal's hot path use
 //! [`collision_probability_tabled`](super::tables::collision_probability_tabled), which reads
@@ -731,60 +732,4 @@ pub fn depth_lower_bound(depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth
     let num = f64::from(depth_a) + f64::from(depth_b);
     let den = f64::from(max_depth_a) + f64::from(max_depth_b);
     if den > 0.0 { (num / den).min(1.0) } else { 0.0 }
-}
-
-/// The curvature term `LB(c_{A∩B})` of Eq. 7/9: a lower-bound-style estimate of the probability
-/// that a collision cell really holds intersecting polygons, from the node depths and the
-/// hierarchies' maximum depths. Implementations must return a value in `[0, 1]`.
-pub trait CurvatureBound: Send + Sync {
-    /// `LB` for nodes at depths `depth_a`, `depth_b` of hierarchies of maximum depths
-    /// `max_depth_a`, `max_depth_b`.
-    fn lb(&self, depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64;
-}
-
-/// The paper's curvature term, [`depth_lower_bound`]: 0 at the roots, 1 at the deepest leaves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct DepthRatio;
-
-impl CurvatureBound for DepthRatio {
-    #[inline]
-    fn lb(&self, depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64 {
-        depth_lower_bound(depth_a, depth_b, max_depth_a, max_depth_b)
-    }
-}
-
-/// A fitted curvature term: `LB` looked up by the summed depth `d_A + d_B` (LB takes only
-/// `d_maxA + d_maxB + 1` distinct values for one pair of hierarchies). Entries outside the table,
-/// and entries given as NaN ("not fitted"), fall back to [`DepthRatio`].
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct PerDepthTable {
-    values: Vec<f64>,
-}
-
-impl PerDepthTable {
-    /// A table with `values[d_A + d_B] = LB`. Values are clamped into `[0, 1]` (`+∞` → 1,
-    /// `−∞` → 0); NaN entries are kept and mean "use [`DepthRatio`] for this depth sum".
-    pub fn new(values: Vec<f64>) -> Self {
-        let values = values
-            .into_iter()
-            .map(|v| if v.is_nan() { v } else { v.clamp(0.0, 1.0) })
-            .collect();
-        Self { values }
-    }
-
-    /// The stored values, indexed by `d_A + d_B` (after clamping; NaN = not fitted).
-    pub fn values(&self) -> &[f64] {
-        &self.values
-    }
-}
-
-impl CurvatureBound for PerDepthTable {
-    #[inline]
-    fn lb(&self, depth_a: u32, depth_b: u32, max_depth_a: u32, max_depth_b: u32) -> f64 {
-        let sum = u64::from(depth_a) + u64::from(depth_b);
-        match usize::try_from(sum).ok().and_then(|i| self.values.get(i)) {
-            Some(&v) if !v.is_nan() => v,
-            _ => depth_lower_bound(depth_a, depth_b, max_depth_a, max_depth_b),
-        }
-    }
 }

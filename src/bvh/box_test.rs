@@ -69,14 +69,10 @@ impl RelativeFrame {
         !tb.abs().cmpgt(rb).any()
     }
 
-    /// Distance between the two boxes' centres, and their signed separation along the best
-    /// of the six face axes (negative: how deep they interpenetrate along it).
+    /// Distance between the two boxes' centres.
     #[inline]
-    pub(crate) fn center_distance_and_separation(&self, a: &BvhNode, b: &BvhNode) -> (f32, f32) {
-        let (t, ea, eb) = self.setup(a, b);
-        let gap_a = t.abs() - ea - self.abs_rot * eb;
-        let gap_b = (self.rot_t * t).abs() - eb - self.abs_rot_t * ea;
-        (t.length(), gap_a.max(gap_b).max_element())
+    pub(crate) fn center_distance(&self, a: &BvhNode, b: &BvhNode) -> f32 {
+        self.setup(a, b).0.length()
     }
 
     /// The second frame's rotation and translation in the first frame.
