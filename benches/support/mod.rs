@@ -2,29 +2,13 @@
 //! near-contact poses.
 #![allow(dead_code)]
 
-use std::path::PathBuf;
-
 use stochastic_collision::bvh::CollisionMesh;
 use stochastic_collision::mesh::{TriMesh, generate};
 use stochastic_collision::poses::{ApproachPose, near_contact_poses};
 
-/// The shared meshes the benches measure, smallest first.
-pub const SHARED_MESHES: [&str; 6] = [
-    "bunny.obj",
-    "armadillo.obj",
-    "dragon_50k.obj",
-    "stanford-bunny.obj",
-    "small_intestine_100k.obj",
-    "ogre.obj",
-];
-
-/// Directory of the shared meshes (`../shared/assets/meshes`, or `STOCHASTIC_COLLISION_MESHES`).
-pub fn shared_dir() -> PathBuf {
-    match std::env::var_os("STOCHASTIC_COLLISION_MESHES") {
-        Some(dir) => PathBuf::from(dir),
-        None => PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes"),
-    }
-}
+// The tests' helpers: the list of shared meshes and where they live.
+#[path = "../../tests/common/mod.rs"]
+mod common;
 
 /// `(name, mesh)` for every shared mesh present, plus two generated ones.
 pub fn bench_meshes() -> Vec<(String, TriMesh)> {
@@ -32,8 +16,8 @@ pub fn bench_meshes() -> Vec<(String, TriMesh)> {
         ("icosphere_20k".to_string(), generate::icosphere(1.0, 5)),
         ("torus_32k".to_string(), generate::torus(1.0, 0.3, 256, 64)),
     ];
-    for file in SHARED_MESHES {
-        let path = shared_dir().join(file);
+    for file in common::QUERY_MESHES {
+        let path = common::shared_mesh_dir().join(file);
         match TriMesh::from_obj(&path) {
             Ok(mesh) => out.push((file.trim_end_matches(".obj").to_string(), mesh)),
             Err(e) => eprintln!("note: skipping {file}: {e}"),
