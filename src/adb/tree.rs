@@ -18,10 +18,10 @@ use crate::geometry::Aabb;
 pub struct AdbBuildOptions {
     /// Cells per axis of each node's grid (`resolution³` cells, clamped to 1..=8).
     ///
-    /// 4 (64 cells, within the papers' one-byte count) is the default. With the calibrated
-    /// estimator the measured error is the same for resolutions 2 to 6 (the fit absorbs the
-    /// grid), while the build's clipping work grows with the cell count; the papers' estimator
-    /// fails at every resolution on smooth meshes (`accuracy_vs_time --resolution R`).
+    /// 4 (64 cells, within the papers' one-byte count) is the default, by measurement (the
+    /// `accuracy_vs_time` report's `--resolution R`): the calibrated error is the same at 2, 4
+    /// and 6, but at 2 the coarse counts make queries several times slower, and 6 is no faster
+    /// than 4 while its build costs more.
     pub resolution: u32,
     /// Fraction of the papers' MaxArea at which a cell counts as well-filled (see
     /// [`CellGrid::with_fill_fraction`]).
