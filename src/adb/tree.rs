@@ -29,8 +29,8 @@ pub struct AdbBuildOptions {
     /// Worker threads for the build (0: one per available core).
     pub threads: usize,
     /// Fit a [`Calibration`] of the [`PlanarityEstimator`] on the mesh itself (the papers'
-    /// "estimate parameters" step; used by the default [`CalibratedEstimator`]
-    /// (super::CalibratedEstimator)). `None` skips it.
+    /// "estimate parameters" step; used by the default
+    /// [`CalibratedEstimator`](super::CalibratedEstimator)). `None` skips it.
     pub fit: Option<FitOptions>,
 }
 

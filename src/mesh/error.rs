@@ -39,7 +39,7 @@ pub enum MeshError {
         /// Number of vertices given.
         vertices: usize,
     },
-    /// New positions for [`TriMesh::set_positions`] do not match the vertex count.
+    /// New positions for [`TriMesh::set_positions`](crate::mesh::TriMesh::set_positions) do not match the vertex count.
     #[error("expected {expected} positions (the mesh's vertex count), got {got}")]
     PositionCount {
         /// The mesh's vertex count.

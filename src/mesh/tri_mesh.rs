@@ -111,8 +111,8 @@ impl TriMesh {
     }
 
     /// Replaces all vertex positions (a deformation: same topology), after validating them.
-    /// Bounding-volume hierarchies built on this mesh must then be refitted
-    /// ([`crate::bvh::Bvh::refit`]), never rebuilt.
+    /// Bounding-volume hierarchies built on this mesh must then be refitted, never rebuilt:
+    /// [`CollisionMesh::set_positions`](crate::bvh::CollisionMesh::set_positions) does both.
     ///
     /// # Errors
     /// [`MeshError::PositionCount`] if the count differs, [`MeshError::NonFinite`] for a NaN or
