@@ -39,6 +39,7 @@
 
 pub mod adb;
 pub mod bvh;
+pub mod ecs;
 pub mod geometry;
 pub mod mesh;
 pub mod poses;
@@ -49,6 +50,13 @@ pub mod prelude {
     pub use crate::bvh::{
         Bvh, CollisionMesh, ExactOptions, ExactOutcome, MeshDistance, QueryWorkspace, TrianglePair,
         closest_points, intersecting_pairs, intersects, intersects_with, self_intersections,
+    };
+    pub use crate::ecs::{
+        Collider, ColliderPose, CollidingEntities, CollisionConfig, CollisionDiagnostics,
+        CollisionEnded, CollisionError, CollisionEventsEnabled, CollisionLayers, CollisionStarted,
+        CollisionSystems, Contact, ContactQueue, Deformable, Fidelity, FrameBudget,
+        ImpulseResponsePlugin, Mass, PenaltyResponsePlugin, SelfCollision,
+        StochasticCollisionPlugin, Velocity,
     };
     pub use crate::geometry::{Aabb, Pose};
     pub use crate::mesh::{MeshError, Topology, TriMesh, generate};

@@ -1,0 +1,110 @@
+//! Sharing the frame budget among pairs: priorities, slices, the measured work rate, seeds.
+use bevy_ecs::entity::Entity;
+use glam::Vec3;
+
+use crate::geometry::Aabb;
+
+/// Priority of a pair for the budget (higher: a bigger slice, tested earlier): pairs whose last
+/// answer was uncertain, whose boxes overlap deeply and that move fast need the work most.
+///
+/// `last_probability` is the pair's confidence in the previous run (`None`: a new pair, as
+/// uncertain as can be); `motion` the relative translation since the previous run.
+pub fn pair_priority(last_probability: Option<f64>, a: &Aabb, b: &Aabb, motion: Vec3) -> f32 {
+    let p = last_probability.unwrap_or(0.5) as f32;
+    let uncertainty = 1.0 - (2.0 * p - 1.0).abs();
+    let overlap = (a.max.min(b.max) - a.min.max(b.min)).max(Vec3::ZERO);
+    let size = a.extents().min(b.extents()).max(Vec3::splat(1e-6));
+    let closeness = (overlap / size).min(Vec3::ONE).min_element();
+    let speed = (motion.length() / size.max_element()).min(4.0);
+    (0.25 + uncertainty) * (0.25 + closeness) * (1.0 + speed)
+}
+
+/// Node-pair slices: every pair gets `min`, the rest of `total` goes out in proportion to the
+/// priorities, each slice at most `max`.
+pub fn slices(priorities: &[f32], total: u64, min: u64, max: u64) -> Vec<u64> {
+    let n = priorities.len() as u64;
+    let rest = total.saturating_sub(n * min) as f64;
+    let sum: f64 = priorities.iter().map(|&p| f64::from(p)).sum();
+    priorities
+        .iter()
+        .map(|&p| {
+            let share = if sum > 0.0 {
+                rest * f64::from(p) / sum
+            } else {
+                0.0
+            };
+            (min + share as u64).clamp(min, max.max(min))
+        })
+        .collect()
+}
+
+/// The seed of a pair's randomness in one run: the same for any thread count or order.
+pub fn pair_seed(seed: u64, frame: u64, a: Entity, b: Entity) -> u64 {
+    let mut h = seed ^ 0x9e37_79b9_7f4a_7c15;
+    for v in [frame, a.to_bits(), b.to_bits()] {
+        h = splitmix(h ^ v);
+    }
+    h
+}
+
+fn splitmix(mut z: u64) -> u64 {
+    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// What the budget learns from earlier runs (time mode): node pairs per microsecond of narrow
+/// phase wall-clock time, and the work of the exact pairs, as moving averages.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct WorkRate {
+    pub node_pairs_per_us: f64,
+    pub per_pair_overhead_us: f64,
+}
+
+impl Default for WorkRate {
+    fn default() -> Self {
+        Self {
+            node_pairs_per_us: 20.0,
+            per_pair_overhead_us: 0.5,
+        }
+    }
+}
+
+impl WorkRate {
+    /// Folds in one run: `node_pairs` visited by `pairs` queries in `us` microseconds.
+    pub fn update(&mut self, node_pairs: u64, pairs: usize, us: f64) {
+        if us <= 1.0 || node_pairs == 0 {
+            return;
+        }
+        let overhead = self.per_pair_overhead_us * pairs as f64;
+        let rate = node_pairs as f64 / (us - overhead).max(0.1 * us);
+        self.node_pairs_per_us = 0.8 * self.node_pairs_per_us + 0.2 * rate;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slices_respect_min_max_and_total() {
+        let s = slices(&[1.0, 3.0], 108, 4, 1000);
+        assert_eq!(s, vec![4 + 25, 4 + 75]);
+        let s = slices(&[1.0, 1.0], 4, 8, 1000);
+        assert_eq!(s, vec![8, 8]);
+        let s = slices(&[1.0], 1_000_000, 8, 100);
+        assert_eq!(s, vec![100]);
+    }
+
+    #[test]
+    fn uncertain_close_fast_pairs_come_first() {
+        let a = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let deep = Aabb::new(Vec3::splat(0.2), Vec3::splat(1.2));
+        let graze = Aabb::new(Vec3::splat(0.95), Vec3::splat(1.95));
+        let p = |last, b: &Aabb, m| pair_priority(last, &a, b, m);
+        assert!(p(None, &deep, Vec3::ZERO) > p(None, &graze, Vec3::ZERO));
+        assert!(p(Some(0.5), &deep, Vec3::ZERO) > p(Some(1.0), &deep, Vec3::ZERO));
+        assert!(p(None, &deep, Vec3::X) > p(None, &deep, Vec3::ZERO));
+    }
+}

@@ -1,0 +1,314 @@
+//! The components a user puts on an entity: its collision geometry, how precisely it collides,
+//! with what, and where it is.
+use std::sync::Arc;
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use crate::adb::{AdbBuildOptions, AdbTree};
+use crate::bvh::CollisionMesh;
+use crate::geometry::Pose;
+use crate::mesh::{MeshError, TriMesh};
+
+/// A rigid collider: one mesh and its ADB-tree, shared (`Arc`) by every entity that uses it.
+///
+/// Cloning a `Collider` clones the `Arc`, not the mesh: spawn a thousand boulders from one
+/// `Collider` and there is one tree in memory. Building the ADB-tree costs more than the BVH
+/// (cell counts and a calibration fit), so build each mesh once and clone the collider.
+///
+/// Inserting a `Collider` also inserts, if missing, a [`ColliderPose`] and a
+/// [`CollidingEntities`] (required components).
+///
+/// # Example
+/// ```
+/// use stochastic_collision::prelude::*;
+/// let ball = Collider::new(generate::icosphere(0.5, 1));
+/// let same_tree = ball.clone();
+/// assert!(std::sync::Arc::ptr_eq(ball.tree(), same_tree.tree()));
+/// ```
+#[derive(Component, Clone, Debug)]
+#[require(ColliderPose, CollidingEntities)]
+pub struct Collider {
+    tree: Arc<AdbTree>,
+}
+
+impl Collider {
+    /// Builds the BVH and the ADB-tree of `mesh` (default options).
+    pub fn new(mesh: TriMesh) -> Self {
+        Self::from_tree(Arc::new(AdbTree::new(CollisionMesh::new(mesh))))
+    }
+
+    /// Builds the ADB-tree with `options` (for example `fit: None` for a quicker build whose
+    /// ADB estimates are uncalibrated).
+    pub fn with_options(mesh: TriMesh, options: AdbBuildOptions) -> Self {
+        Self::from_tree(Arc::new(AdbTree::build_with(
+            CollisionMesh::new(mesh),
+            options,
+        )))
+    }
+
+    /// A collider sharing an existing tree.
+    pub fn from_tree(tree: Arc<AdbTree>) -> Self {
+        Self { tree }
+    }
+
+    /// Loads an OBJ file and builds its collider.
+    ///
+    /// # Errors
+    /// As [`TriMesh::from_obj`].
+    pub fn from_obj(path: impl AsRef<std::path::Path>) -> Result<Self, MeshError> {
+        Ok(Self::new(TriMesh::from_obj(path)?))
+    }
+
+    /// The shared ADB-tree.
+    #[inline]
+    pub fn tree(&self) -> &Arc<AdbTree> {
+        &self.tree
+    }
+
+    /// The shared mesh and its BVH.
+    #[inline]
+    pub fn collision_mesh(&self) -> &CollisionMesh {
+        self.tree.collision_mesh()
+    }
+}
+
+/// A deformable mesh: the entity owns its vertex positions (in its local frame) and its BVH,
+/// which the Prepare stage refits (never rebuilds) in parallel when the positions changed.
+///
+/// Move vertices through [`Deformable::positions_mut`]; the refit happens in the next run of
+/// the collision schedule. Non-finite positions are reported as a
+/// [`CollisionError`](super::CollisionError) and the entity is skipped until they are fixed.
+/// Deformable meshes have no ADB-tree (its cell counts are not refittable): a pair with a
+/// deformable mesh and [`Fidelity::Adb`] is tested exactly.
+///
+/// # Example
+/// ```
+/// use stochastic_collision::prelude::*;
+/// let mut cloth = Deformable::new(generate::cloth_grid(1.0, 1.0, 4, 4));
+/// for p in cloth.positions_mut() {
+///     p.y += 0.1 * p.x;
+/// }
+/// assert_eq!(cloth.positions().len(), 25);
+/// ```
+#[derive(Component, Clone, Debug)]
+#[require(ColliderPose, CollidingEntities)]
+pub struct Deformable {
+    pub(crate) mesh: Arc<CollisionMesh>,
+    pub(crate) positions: Vec<Vec3>,
+    pub(crate) stale: bool,
+    pub(crate) broken: Option<MeshError>,
+}
+
+impl Deformable {
+    /// A deformable mesh starting at the mesh's positions.
+    pub fn new(mesh: TriMesh) -> Self {
+        let positions = mesh.positions().to_vec();
+        Self {
+            mesh: Arc::new(CollisionMesh::new(mesh)),
+            positions,
+            stale: false,
+            broken: None,
+        }
+    }
+
+    /// The current vertex positions (local frame), as last written.
+    #[inline]
+    pub fn positions(&self) -> &[Vec3] {
+        &self.positions
+    }
+
+    /// The vertex positions, to move them; the tree is refitted in the next Prepare stage.
+    #[inline]
+    pub fn positions_mut(&mut self) -> &mut [Vec3] {
+        self.stale = true;
+        &mut self.positions
+    }
+
+    /// The mesh and tree as of the last refit (what the collision stages see).
+    #[inline]
+    pub fn collision_mesh(&self) -> &CollisionMesh {
+        &self.mesh
+    }
+
+    /// Why the last positions were rejected (the entity is skipped until they are fixed).
+    #[inline]
+    pub fn error(&self) -> Option<&MeshError> {
+        self.broken.as_ref()
+    }
+}
+
+/// How precisely an entity's pairs are tested. A pair uses the more accurate fidelity of its
+/// two entities (`Exact` > `Tracking` > `Adb` > `Bounds`; two `Adb` take the higher `p_min`).
+///
+/// An entity without this component uses [`CollisionConfig::default_fidelity`]
+/// (rigid colliders) or `Exact` (deformables).
+///
+/// [`CollisionConfig::default_fidelity`]: super::CollisionConfig::default_fidelity
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub enum Fidelity {
+    /// The exact BVH query: a certain answer, whatever it costs (not cut by the budget).
+    Exact,
+    /// The time-critical ADB traversal with this confidence target, cut by the pair's slice
+    /// of the frame budget: the answer carries its probability.
+    Adb {
+        /// Confidence the answer needs (the papers use 0.99; lower is faster).
+        p_min: f64,
+    },
+    /// Stochastic closest-feature tracking (contacts with points, normals and depths),
+    /// tracking this many feature pairs per frame. Runs in the Tracking stage.
+    Tracking {
+        /// Feature pairs tracked per frame and pair.
+        pairs_per_frame: u32,
+    },
+    /// World boxes only: the pair collides when the boxes overlap (triggers, far objects).
+    Bounds,
+}
+
+impl Fidelity {
+    /// Rank for "the more accurate wins".
+    pub(crate) fn rank(&self) -> u8 {
+        match self {
+            Fidelity::Bounds => 0,
+            Fidelity::Adb { .. } => 1,
+            Fidelity::Tracking { .. } => 2,
+            Fidelity::Exact => 3,
+        }
+    }
+
+    /// The fidelity of a pair: the more accurate of the two.
+    pub fn combine(self, other: Fidelity) -> Fidelity {
+        match (self, other) {
+            (Fidelity::Adb { p_min: a }, Fidelity::Adb { p_min: b }) => {
+                Fidelity::Adb { p_min: a.max(b) }
+            }
+            (
+                Fidelity::Tracking { pairs_per_frame: a },
+                Fidelity::Tracking { pairs_per_frame: b },
+            ) => Fidelity::Tracking {
+                pairs_per_frame: a.max(b),
+            },
+            (a, b) if b.rank() > a.rank() => b,
+            (a, _) => a,
+        }
+    }
+}
+
+/// Marks a [`Deformable`] whose mesh may collide with itself: the self-collision pass (in the
+/// Tracking stage) runs only when some entity has this marker. Ignored on rigid colliders (a
+/// rigid mesh's self-intersections never change).
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct SelfCollision;
+
+/// Which entities collide with which: a pair is tested only if each entity's `memberships`
+/// share a bit with the other's `filters`. The default is all bits in both.
+///
+/// # Example
+/// ```
+/// use stochastic_collision::prelude::*;
+/// let debris = CollisionLayers::new(0b01, 0b10); // member of layer 0, hits layer 1 only
+/// let ground = CollisionLayers::new(0b10, 0b01);
+/// assert!(debris.interacts_with(&ground));
+/// assert!(!debris.interacts_with(&debris));
+/// ```
+#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CollisionLayers {
+    /// Layers this entity belongs to (bit mask).
+    pub memberships: u32,
+    /// Layers this entity collides with (bit mask).
+    pub filters: u32,
+}
+
+impl Default for CollisionLayers {
+    fn default() -> Self {
+        Self::ALL
+    }
+}
+
+impl CollisionLayers {
+    /// Member of every layer, colliding with every layer.
+    pub const ALL: Self = Self {
+        memberships: u32::MAX,
+        filters: u32::MAX,
+    };
+
+    /// Layers from masks.
+    pub const fn new(memberships: u32, filters: u32) -> Self {
+        Self {
+            memberships,
+            filters,
+        }
+    }
+
+    /// Whether a pair of entities with these layers is tested.
+    #[inline]
+    pub fn interacts_with(&self, other: &CollisionLayers) -> bool {
+        self.memberships & other.filters != 0 && other.memberships & self.filters != 0
+    }
+}
+
+/// The entities this entity currently collides with (sorted), kept up to date by the Report
+/// stage. Inserted automatically with [`Collider`] and [`Deformable`]; a mesh's own
+/// self-collision is not listed.
+#[derive(Component, Clone, Debug, Default, PartialEq, Eq)]
+pub struct CollidingEntities(pub(crate) Vec<Entity>);
+
+impl CollidingEntities {
+    /// The colliding entities, sorted.
+    #[inline]
+    pub fn entities(&self) -> &[Entity] {
+        &self.0
+    }
+
+    /// Whether this entity collides with `other`.
+    #[inline]
+    pub fn contains(&self, other: Entity) -> bool {
+        self.0.binary_search(&other).is_ok()
+    }
+
+    /// Number of colliding entities.
+    #[inline]
+    pub fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// Whether the entity collides with nothing.
+    #[inline]
+    pub fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+
+    pub(crate) fn insert(&mut self, e: Entity) {
+        if let Err(i) = self.0.binary_search(&e) {
+            self.0.insert(i, e);
+        }
+    }
+
+    pub(crate) fn remove(&mut self, e: Entity) {
+        if let Ok(i) = self.0.binary_search(&e) {
+            self.0.remove(i);
+        }
+    }
+}
+
+/// The pose the collision stages use (rotation and translation; no scale).
+///
+/// With the `transform` feature (default), an entity that also has bevy_transform's
+/// `GlobalTransform` gets this overwritten from it at the start of every run (scale is
+/// ignored); otherwise set it yourself (headless apps, simulations that own their poses).
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
+pub struct ColliderPose(pub Pose);
+
+impl ColliderPose {
+    /// A pose at `translation`, not rotated.
+    pub fn from_translation(translation: Vec3) -> Self {
+        Self(Pose::from_translation(translation))
+    }
+}
+
+/// Opt in to per-entity observer events ([`CollisionStarted`](super::CollisionStarted) and
+/// [`CollisionEnded`](super::CollisionEnded) triggered on this entity, observed with
+/// `On<CollisionStarted>`). The marker is read when events are emitted, so adding it to an
+/// entity that already exists works.
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct CollisionEventsEnabled;

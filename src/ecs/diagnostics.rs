@@ -1,0 +1,165 @@
+//! Per-stage timings and work counters of the collision pipeline.
+use std::time::{Duration, Instant};
+
+use bevy_ecs::prelude::*;
+
+use super::plugin::{CollisionConfig, FrameBudget};
+
+/// A stage of the pipeline whose time is measured (the Prepare set holds two: `prepare` and
+/// `refit`; the Tracking set two: `self_collision` and `tracking`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Stage {
+    /// Pose validation and world boxes.
+    Prepare,
+    /// Refit of deformed meshes (deformables only).
+    Refit,
+    /// Sweep and prune.
+    BroadPhase,
+    /// Pair tests.
+    NarrowPhase,
+    /// Self-collision of deformable meshes (deformables only).
+    SelfCollision,
+    /// Tracked pairs.
+    Tracking,
+    /// Events and the contact queue.
+    Report,
+    /// Responses (measured by the response systems that call [`CollisionDiagnostics::record`]).
+    Response,
+}
+
+impl Stage {
+    /// Every stage, in pipeline order.
+    pub const ALL: [Stage; 8] = [
+        Stage::Prepare,
+        Stage::Refit,
+        Stage::BroadPhase,
+        Stage::NarrowPhase,
+        Stage::SelfCollision,
+        Stage::Tracking,
+        Stage::Report,
+        Stage::Response,
+    ];
+
+    /// The stage's name in profiles and diagnostics (`snake_case`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Stage::Prepare => "prepare",
+            Stage::Refit => "refit",
+            Stage::BroadPhase => "broad_phase",
+            Stage::NarrowPhase => "narrow_phase",
+            Stage::SelfCollision => "self_collision",
+            Stage::Tracking => "tracking",
+            Stage::Report => "report",
+            Stage::Response => "response",
+        }
+    }
+}
+
+/// One stage's record.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StageRecord {
+    /// Time in the current (or last) run; `None` if the stage did not run.
+    pub last: Option<Duration>,
+    /// Items processed in the last run (entities, pairs, meshes, events…).
+    pub items: u64,
+    /// Runs in which the stage ran.
+    pub runs: u64,
+    /// Total time over all runs.
+    pub total: Duration,
+}
+
+/// Work done, summed over all runs.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct CollisionCounters {
+    /// Node pairs visited by all queries.
+    pub node_pairs: u64,
+    /// Pairs tested with ADB.
+    pub adb_pairs: u64,
+    /// ADB pairs that ran out of their slice.
+    pub budget_exhausted_pairs: u64,
+    /// Pairs tested exactly.
+    pub exact_pairs: u64,
+    /// `CollisionStarted` messages written.
+    pub started: u64,
+    /// `CollisionEnded` messages written.
+    pub ended: u64,
+    /// `Contact` messages written.
+    pub contacts: u64,
+    /// Runs whose collision stages (Prepare to Report) took longer than a time budget.
+    pub overrun_runs: u64,
+}
+
+/// Timings and counters of the collision pipeline: per stage, the time of the last run (`None`
+/// = not run), runs and totals; the whole collision time (Prepare to Report) of the last run.
+#[derive(Resource, Debug, Clone)]
+pub struct CollisionDiagnostics {
+    /// Runs of the pipeline so far.
+    pub frame: u64,
+    pub(crate) frame_start: Instant,
+    /// Prepare to Report in the last run (wall clock, including scheduling gaps).
+    pub collision_time: Duration,
+    stages: [StageRecord; 8],
+    reserve: Duration,
+    /// Work counters.
+    pub counters: CollisionCounters,
+}
+
+impl Default for CollisionDiagnostics {
+    fn default() -> Self {
+        Self {
+            frame: 0,
+            frame_start: Instant::now(),
+            collision_time: Duration::ZERO,
+            stages: [StageRecord::default(); 8],
+            reserve: Duration::ZERO,
+            counters: CollisionCounters::default(),
+        }
+    }
+}
+
+impl CollisionDiagnostics {
+    /// The record of `stage`.
+    pub fn stage(&self, stage: Stage) -> &StageRecord {
+        &self.stages[stage as usize]
+    }
+
+    /// Adds `time` to `stage` in this run (several systems may add to one stage).
+    pub fn record(&mut self, stage: Stage, time: Duration, items: u64) {
+        let r = &mut self.stages[stage as usize];
+        if r.last.is_none() {
+            r.runs += 1;
+            r.items = 0;
+        }
+        r.last = Some(r.last.unwrap_or_default() + time);
+        r.items += items;
+        r.total += time;
+    }
+
+    /// Time to keep free after the narrow phase (what Tracking and Report took last run).
+    pub(crate) fn reserve_after_narrow(&self) -> Duration {
+        self.reserve
+    }
+}
+
+/// Starts a run: counts it, resets the stages' last times to "not run".
+pub fn begin_frame(mut diag: ResMut<CollisionDiagnostics>) {
+    diag.frame += 1;
+    diag.frame_start = Instant::now();
+    for r in &mut diag.stages {
+        r.last = None;
+    }
+}
+
+/// Ends the collision stages of a run: the total time, overruns.
+pub fn end_frame(mut diag: ResMut<CollisionDiagnostics>, config: Res<CollisionConfig>) {
+    diag.collision_time = diag.frame_start.elapsed();
+    diag.reserve = [Stage::SelfCollision, Stage::Tracking, Stage::Report]
+        .iter()
+        .filter_map(|&s| diag.stage(s).last)
+        .sum();
+    if let FrameBudget::Time(b) = config.budget
+        && diag.collision_time > b
+    {
+        diag.counters.overrun_runs += 1;
+    }
+}

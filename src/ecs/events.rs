@@ -1,0 +1,359 @@
+//! Report stage: collision events (messages and opt-in observer events), errors, and the
+//! contact queue that responses consume.
+//!
+//! # Reading events
+//! As messages, in any system (runs after [`CollisionSystems::Report`] see them in the same
+//! frame):
+//! ```
+//! # use bevy_ecs::prelude::*;
+//! # use stochastic_collision::prelude::*;
+//! fn on_hits(mut started: MessageReader<CollisionStarted>, mut contacts: MessageReader<Contact>) {
+//!     for e in started.read() {
+//!         println!("{:?} started touching {:?}", e.entity, e.other);
+//!     }
+//!     for c in contacts.read() {
+//!         println!("contact at {} depth {} (p = {})", c.point, c.depth, c.probability);
+//!     }
+//! }
+//! # bevy_ecs::system::assert_is_system(on_hits);
+//! ```
+//! Or per entity, with an observer, for entities with [`CollisionEventsEnabled`]:
+//! ```
+//! # use bevy_ecs::prelude::*;
+//! # use stochastic_collision::prelude::*;
+//! # let mut world = World::new();
+//! world
+//!     .spawn(CollisionEventsEnabled)
+//!     .observe(|hit: On<CollisionStarted>| println!("{:?} hit me", hit.other));
+//! ```
+//! Messages follow Bevy's rule: a message stays readable for two app updates, so a reader
+//! running every update, or every other update, sees every event even when the collision
+//! schedule runs several times per update (fixed time steps).
+//!
+//! [`CollisionSystems::Report`]: super::CollisionSystems::Report
+use std::time::Instant;
+
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use super::components::{CollidingEntities, CollisionEventsEnabled};
+use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::narrow_phase::{Method, PairOutcomes};
+use super::plugin::CollisionConfig;
+use crate::bvh::TrianglePair;
+use crate::mesh::MeshError;
+
+/// Two entities started touching (or a deformable mesh started touching itself:
+/// `entity == other`). Written once per contact interval.
+///
+/// As a message, `entity < other`. As an observer event (entities with
+/// [`CollisionEventsEnabled`]), `entity` is the observed entity.
+#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CollisionStarted {
+    /// The first entity (the observed one for observer events).
+    #[event_target]
+    pub entity: Entity,
+    /// The other entity.
+    pub other: Entity,
+}
+
+/// Two entities stopped touching: written once at the end of each contact interval, also
+/// when one of them was despawned or became invalid. Same conventions as [`CollisionStarted`].
+#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct CollisionEnded {
+    /// The first entity (the observed one for observer events).
+    #[event_target]
+    pub entity: Entity,
+    /// The other entity.
+    pub other: Entity,
+}
+
+/// One contact point of a colliding pair in this run.
+#[derive(Message, Clone, Copy, Debug, PartialEq)]
+pub struct Contact {
+    /// First entity.
+    pub a: Entity,
+    /// Second entity (`a` itself for a self-contact of a deformable mesh).
+    pub b: Entity,
+    /// Contact point, world space.
+    pub point: Vec3,
+    /// Unit direction to push `b` away from `a`, world space.
+    pub normal: Vec3,
+    /// Estimated penetration depth along `normal`.
+    pub depth: f32,
+    /// Confidence that the pair collides (1 for exact answers).
+    pub probability: f64,
+    /// The triangle pair (`a`'s, `b`'s) when the contact comes from one.
+    pub triangles: Option<TrianglePair>,
+    /// Priority for responses (higher first): the pair's priority, deeper contacts higher.
+    pub priority: f32,
+    /// Run in which the contact was found (see [`CollisionDiagnostics::frame`]).
+    pub frame: u64,
+}
+
+/// Why an entity was skipped in a run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CollisionErrorKind {
+    /// The pose has a NaN or infinite component, or a rotation far from unit length.
+    #[error("invalid pose: translation {translation:?}, rotation {rotation:?}")]
+    InvalidPose {
+        /// The translation.
+        translation: [f32; 3],
+        /// The rotation quaternion (x, y, z, w).
+        rotation: [f32; 4],
+    },
+    /// A deformable mesh's new positions were rejected (for example a non-finite vertex).
+    #[error("deformable mesh rejected: {0}")]
+    Mesh(MeshError),
+}
+
+/// An entity was skipped because its data is bad; the other entities go on. Written once when
+/// the entity becomes invalid (again after it recovered and broke again); its contacts end.
+#[derive(Message, Clone, Debug, PartialEq)]
+pub struct CollisionError {
+    /// The entity.
+    pub entity: Entity,
+    /// What is wrong.
+    pub kind: CollisionErrorKind,
+}
+
+/// What the Report stage remembers: the touching pairs of the last run.
+#[derive(Resource, Debug, Default)]
+pub struct ReportState {
+    touching: Vec<(Entity, Entity)>,
+}
+
+impl ReportState {
+    /// The pairs touching in the last run, sorted (`(e, e)` for self-collision).
+    pub fn touching(&self) -> &[(Entity, Entity)] {
+        &self.touching
+    }
+}
+
+/// Contacts waiting for a response, highest priority first.
+///
+/// Filled by the Report stage (when some response is registered: the built-in response
+/// plugins do it, a custom response calls [`ContactQueue::enable`] once). A response consumes
+/// contacts with [`ContactQueue::consume`] inside the per-run response budget
+/// ([`CollisionConfig::response_budget`]); what it leaves stays queued, counted, for the next
+/// run. A newer contact of the same pair replaces a waiting one.
+#[derive(Resource, Debug, Default)]
+pub struct ContactQueue {
+    enabled: bool,
+    queue: Vec<Contact>,
+    remaining: Option<usize>,
+    /// Contacts carried over into a later run, summed over runs.
+    pub deferred_total: u64,
+    /// Contacts consumed by responses.
+    pub consumed_total: u64,
+    /// Waiting contacts replaced by a newer contact of the same pair.
+    pub superseded_total: u64,
+}
+
+impl ContactQueue {
+    /// Starts filling the queue (call once when adding a response system).
+    pub fn enable(&mut self) {
+        self.enabled = true;
+    }
+
+    /// Whether the queue is filled.
+    pub fn is_enabled(&self) -> bool {
+        self.enabled
+    }
+
+    /// Contacts waiting, highest priority first.
+    pub fn waiting(&self) -> &[Contact] {
+        &self.queue
+    }
+
+    /// Number of contacts waiting.
+    pub fn len(&self) -> usize {
+        self.queue.len()
+    }
+
+    /// Whether no contact is waiting.
+    pub fn is_empty(&self) -> bool {
+        self.queue.is_empty()
+    }
+
+    /// What is left of this run's response budget (`None`: unlimited).
+    pub fn remaining_budget(&self) -> Option<usize> {
+        self.remaining
+    }
+
+    /// Offers the waiting contacts to `respond`, highest priority first, until this run's
+    /// response budget is spent. `respond` returns `true` if it consumed the contact (it
+    /// leaves the queue and costs one unit of budget), `false` to leave it to another response.
+    pub fn consume(&mut self, mut respond: impl FnMut(&Contact) -> bool) -> usize {
+        let mut consumed = 0;
+        let mut k = 0;
+        while k < self.queue.len() {
+            if self.remaining == Some(0) {
+                break;
+            }
+            if respond(&self.queue[k]) {
+                self.queue.remove(k);
+                consumed += 1;
+                if let Some(r) = &mut self.remaining {
+                    *r -= 1;
+                }
+            } else {
+                k += 1;
+            }
+        }
+        self.consumed_total += consumed as u64;
+        consumed
+    }
+
+    fn refill(&mut self, fresh: Vec<Contact>, budget: Option<usize>) {
+        self.remaining = budget;
+        if !self.enabled {
+            return;
+        }
+        let mut fresh_pairs: Vec<(Entity, Entity)> = fresh.iter().map(|c| (c.a, c.b)).collect();
+        fresh_pairs.dedup();
+        let before = self.queue.len();
+        self.queue
+            .retain(|c| fresh_pairs.binary_search(&(c.a, c.b)).is_err());
+        self.superseded_total += (before - self.queue.len()) as u64;
+        self.deferred_total += self.queue.len() as u64;
+        self.queue.extend(fresh);
+        self.queue.sort_by(|x, y| {
+            y.priority
+                .total_cmp(&x.priority)
+                .then((x.a, x.b).cmp(&(y.a, y.b)))
+        });
+    }
+}
+
+/// Compares the run's answers with the last run's and writes the events.
+#[allow(clippy::too_many_arguments)]
+pub fn report_collisions(
+    mut outcomes: ResMut<PairOutcomes>,
+    mut state: ResMut<ReportState>,
+    mut queue: ResMut<ContactQueue>,
+    config: Res<CollisionConfig>,
+    mut colliding: Query<&mut CollidingEntities>,
+    observed: Query<(), With<CollisionEventsEnabled>>,
+    mut started_w: MessageWriter<CollisionStarted>,
+    mut ended_w: MessageWriter<CollisionEnded>,
+    mut contact_w: MessageWriter<Contact>,
+    mut commands: Commands,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    let start = Instant::now();
+    let frame = diag.frame;
+    outcomes
+        .outcomes
+        .sort_by_key(|o| (o.a, o.b, o.method == Method::SelfCollision));
+    let now: Vec<(Entity, Entity)> = outcomes
+        .outcomes
+        .iter()
+        .filter(|o| o.collides)
+        .map(|o| (o.a, o.b))
+        .collect();
+    let (mut started, mut ended) = (Vec::new(), Vec::new());
+    let (mut i, mut j) = (0, 0);
+    let old = &state.touching;
+    while i < old.len() || j < now.len() {
+        match (old.get(i), now.get(j)) {
+            (Some(o), Some(n)) if o == n => (i, j) = (i + 1, j + 1),
+            (Some(o), Some(n)) if o < n => {
+                ended.push(*o);
+                i += 1;
+            }
+            (Some(o), None) => {
+                ended.push(*o);
+                i += 1;
+            }
+            (_, Some(n)) => {
+                started.push(*n);
+                j += 1;
+            }
+            (None, None) => break,
+        }
+    }
+    for &(a, b) in &ended {
+        set_colliding(&mut colliding, a, b, false);
+        ended_w.write(CollisionEnded {
+            entity: a,
+            other: b,
+        });
+        notify(&mut commands, &observed, a, b, |entity, other| {
+            CollisionEnded { entity, other }
+        });
+    }
+    for &(a, b) in &started {
+        set_colliding(&mut colliding, a, b, true);
+        started_w.write(CollisionStarted {
+            entity: a,
+            other: b,
+        });
+        notify(&mut commands, &observed, a, b, |entity, other| {
+            CollisionStarted { entity, other }
+        });
+    }
+    let mut fresh = Vec::new();
+    for o in outcomes.outcomes.iter().filter(|o| o.collides) {
+        for c in &o.contacts {
+            fresh.push(Contact {
+                a: o.a,
+                b: o.b,
+                point: c.point,
+                normal: c.normal,
+                depth: c.depth,
+                probability: o.probability,
+                triangles: c.triangles,
+                priority: o.priority * (1.0 + c.depth.max(0.0)),
+                frame,
+            });
+        }
+    }
+    contact_w.write_batch(fresh.iter().copied());
+    let counters = &mut diag.counters;
+    counters.started += started.len() as u64;
+    counters.ended += ended.len() as u64;
+    counters.contacts += fresh.len() as u64;
+    queue.refill(fresh, config.response_budget);
+    state.touching = now;
+    diag.record(
+        Stage::Report,
+        start.elapsed(),
+        (started.len() + ended.len()) as u64,
+    );
+}
+
+/// Updates both entities' [`CollidingEntities`] (not for a self-collision).
+fn set_colliding(q: &mut Query<&mut CollidingEntities>, a: Entity, b: Entity, touching: bool) {
+    if a == b {
+        return;
+    }
+    for (x, y) in [(a, b), (b, a)] {
+        if let Ok(mut c) = q.get_mut(x) {
+            if touching {
+                c.insert(y);
+            } else {
+                c.remove(y);
+            }
+        }
+    }
+}
+
+/// Triggers the observer event on each endpoint that opted in, as `(observed, other)`.
+fn notify<E>(
+    commands: &mut Commands,
+    observed: &Query<(), With<CollisionEventsEnabled>>,
+    a: Entity,
+    b: Entity,
+    make: impl Fn(Entity, Entity) -> E,
+) where
+    E: EntityEvent,
+    for<'t> <E as Event>::Trigger<'t>: Default,
+{
+    let ends = [(a, b), (b, a)];
+    for &(x, y) in &ends[..if a == b { 1 } else { 2 }] {
+        if observed.contains(x) {
+            commands.trigger(make(x, y));
+        }
+    }
+}

@@ -1,0 +1,209 @@
+//! The plugin and its configuration.
+use std::time::Duration;
+
+use bevy_app::prelude::*;
+use bevy_ecs::intern::Interned;
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleLabel;
+
+use super::broad_phase::{BroadPhaseState, CandidatePairs, sweep_and_prune};
+use super::components::Fidelity;
+use super::diagnostics::{CollisionDiagnostics, begin_frame, end_frame};
+use super::events::{
+    CollisionEnded, CollisionError, CollisionStarted, Contact, ContactQueue, ReportState,
+    report_collisions,
+};
+use super::narrow_phase::{PairOutcomes, narrow_phase};
+use super::pool::CollisionTaskPool;
+use super::prepare::{ColliderFrame, PrepareState, gather_colliders, refit_deformables};
+use super::schedule::CollisionSystems;
+use super::tracking_systems::{needs_self_pass, needs_tracking, self_collision, track_pairs};
+
+/// How much work the collision stages (Prepare to Report) may do per run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrameBudget {
+    /// No limit: ADB pairs run until their `p_min`/`k_min` rule settles them.
+    Unlimited,
+    /// A wall-clock budget. The narrow phase converts what is left of it after Prepare and
+    /// BroadPhase into node pairs at the rate measured in earlier runs, shares them among the
+    /// ADB pairs by priority, and gives pairs still waiting at the deadline only their minimum
+    /// slice. Results then depend on timing: use `NodePairs` for reproducible runs.
+    Time(Duration),
+    /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by
+    /// priority. Deterministic (same results for any thread count and machine).
+    NodePairs(u64),
+}
+
+/// The plugin's configuration, a resource (change it at run time).
+#[derive(Resource, Debug, Clone, PartialEq)]
+pub struct CollisionConfig {
+    /// Budget of the collision stages per run.
+    pub budget: FrameBudget,
+    /// Fidelity of rigid colliders without a [`Fidelity`] component.
+    pub default_fidelity: Fidelity,
+    /// `k_min` of the ADB queries (pieces of evidence needed).
+    pub k_min: u32,
+    /// Node pairs every ADB pair gets whatever the budget (the root pair is always expanded).
+    pub min_slice: u64,
+    /// Node pairs an ADB pair gets at most, however generous the budget.
+    pub max_slice: u64,
+    /// Seed of all randomness (per pair: `(seed, frame, entities)`), so results do not depend on
+    /// thread scheduling.
+    pub seed: u64,
+    /// Distance by which world boxes are inflated before the broad phase.
+    pub aabb_margin: f32,
+    /// Contacts reported per pair of distinct entities at most.
+    pub max_contacts_per_pair: usize,
+    /// Contacts reported per self-colliding mesh at most.
+    pub max_self_contacts: usize,
+    /// Contacts the Response stage may consume per run (`None`: all of them). What is left
+    /// stays in the [`ContactQueue`] for the next run, highest priority first.
+    pub response_budget: Option<usize>,
+}
+
+impl Default for CollisionConfig {
+    fn default() -> Self {
+        Self {
+            budget: FrameBudget::Time(Duration::from_micros(2000)),
+            default_fidelity: Fidelity::Adb { p_min: 0.99 },
+            k_min: 10,
+            min_slice: 8,
+            max_slice: 4096,
+            seed: 0x5eed,
+            aabb_margin: 0.0,
+            max_contacts_per_pair: 4,
+            max_self_contacts: 256,
+            response_budget: None,
+        }
+    }
+}
+
+/// Time-critical collision detection for triangle meshes, as a Bevy plugin.
+///
+/// Adds the pipeline ([`CollisionSystems`]: Prepare, BroadPhase, NarrowPhase, Tracking, Report,
+/// Response, chained) to one schedule, the messages ([`CollisionStarted`], [`CollisionEnded`],
+/// [`Contact`], [`CollisionError`]), and the resources ([`CollisionConfig`],
+/// [`CollisionDiagnostics`], [`ContactQueue`]).
+///
+/// **Schedule.** The default is `FixedPostUpdate`, as for physics: it runs only with a time
+/// plugin (bevy_time's `TimePlugin`, part of Bevy's `DefaultPlugins` and `MinimalPlugins`).
+/// In a bare `App` from bevy_app alone, nothing ticks `FixedPostUpdate`: use
+/// [`StochasticCollisionPlugin::in_schedule`] with `PostUpdate` (as the examples and tests do),
+/// or run your own schedule label by hand.
+///
+/// **Threads.** Pairs are tested on bevy_tasks' `ComputeTaskPool` (initialised with one thread
+/// per core if nobody did it before). On 2 cores, `TaskPoolPlugin::default()` gives that pool
+/// only **one** thread; either configure the pool or set [`StochasticCollisionPlugin::threads`],
+/// which gives the plugin its own pool of exactly that many threads (`Some(1)`: no pool).
+///
+/// # Example
+/// ```
+/// use bevy_app::prelude::*;
+/// use bevy_ecs::prelude::*;
+/// use stochastic_collision::prelude::*;
+///
+/// let mut app = App::new();
+/// app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate));
+/// let ball = Collider::new(generate::icosphere(1.0, 2));
+/// let a = app.world_mut().spawn((ball.clone(), ColliderPose::from_translation(Vec3::ZERO))).id();
+/// let b = app.world_mut().spawn((ball, ColliderPose::from_translation(Vec3::X * 1.5))).id();
+/// app.update();
+///
+/// let started = app.world().resource::<Messages<CollisionStarted>>();
+/// assert_eq!(started.len(), 1);
+/// assert!(app.world().get::<CollidingEntities>(a).unwrap().contains(b));
+/// ```
+pub struct StochasticCollisionPlugin {
+    /// The schedule the pipeline runs in (default `FixedPostUpdate`).
+    pub schedule: Interned<dyn ScheduleLabel>,
+    /// The initial [`CollisionConfig`].
+    pub config: CollisionConfig,
+    /// Threads testing pairs: `None` uses bevy's `ComputeTaskPool`; `Some(n)` a pool of
+    /// exactly `n` threads owned by the plugin (`Some(1)`: on the calling thread, no pool).
+    pub threads: Option<usize>,
+}
+
+impl Default for StochasticCollisionPlugin {
+    fn default() -> Self {
+        Self::in_schedule(FixedPostUpdate)
+    }
+}
+
+impl StochasticCollisionPlugin {
+    /// The plugin running in `schedule`, default configuration.
+    pub fn in_schedule(schedule: impl ScheduleLabel) -> Self {
+        Self {
+            schedule: schedule.intern(),
+            config: CollisionConfig::default(),
+            threads: None,
+        }
+    }
+
+    /// With this configuration.
+    pub fn with_config(mut self, config: CollisionConfig) -> Self {
+        self.config = config;
+        self
+    }
+
+    /// With a pool of exactly `threads` threads for the pair tests.
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = Some(threads);
+        self
+    }
+}
+
+impl Plugin for StochasticCollisionPlugin {
+    fn build(&self, app: &mut App) {
+        use CollisionSystems::*;
+        let s = self.schedule;
+        app.add_message::<CollisionStarted>()
+            .add_message::<CollisionEnded>()
+            .add_message::<Contact>()
+            .add_message::<CollisionError>()
+            .insert_resource(self.config.clone())
+            .insert_resource(CollisionTaskPool::new(self.threads))
+            .init_resource::<CollisionDiagnostics>()
+            .init_resource::<ColliderFrame>()
+            .init_resource::<PrepareState>()
+            .init_resource::<BroadPhaseState>()
+            .init_resource::<CandidatePairs>()
+            .init_resource::<PairOutcomes>()
+            .init_resource::<ReportState>()
+            .init_resource::<ContactQueue>()
+            .configure_sets(
+                s,
+                (Prepare, BroadPhase, NarrowPhase, Tracking, Report, Response).chain(),
+            )
+            .add_systems(
+                s,
+                (
+                    (
+                        begin_frame,
+                        refit_deformables.run_if(super::prepare::any_stale),
+                        gather_colliders,
+                    )
+                        .chain()
+                        .in_set(Prepare),
+                    sweep_and_prune.in_set(BroadPhase),
+                    narrow_phase.in_set(NarrowPhase),
+                    (
+                        self_collision.run_if(needs_self_pass),
+                        track_pairs.run_if(needs_tracking),
+                    )
+                        .chain()
+                        .in_set(Tracking),
+                    (report_collisions, end_frame).chain().in_set(Report),
+                ),
+            );
+        #[cfg(feature = "transform")]
+        app.add_systems(
+            s,
+            super::prepare::sync_global_transforms
+                .in_set(Prepare)
+                .before(gather_colliders)
+                .before(refit_deformables),
+        );
+        #[cfg(feature = "diagnostic")]
+        super::diagnostics::register_store(app, s);
+    }
+}

@@ -1,0 +1,121 @@
+//! Where the parallel stages run: bevy's `ComputeTaskPool` or a pool owned by the plugin.
+use bevy_ecs::prelude::*;
+use bevy_tasks::{ComputeTaskPool, TaskPool, TaskPoolBuilder};
+
+/// The threads the parallel stages use (see [`StochasticCollisionPlugin::threads`]).
+///
+/// [`StochasticCollisionPlugin::threads`]: super::StochasticCollisionPlugin::threads
+#[derive(Resource)]
+pub struct CollisionTaskPool {
+    own: Option<TaskPool>,
+    inline: bool,
+}
+
+impl CollisionTaskPool {
+    /// `None`: bevy's `ComputeTaskPool`; `Some(1)` (or 0): inline; `Some(n)`: `n` own threads.
+    pub fn new(threads: Option<usize>) -> Self {
+        match threads {
+            None => Self {
+                own: None,
+                inline: false,
+            },
+            Some(0 | 1) => Self {
+                own: None,
+                inline: true,
+            },
+            Some(n) => Self {
+                own: Some(
+                    TaskPoolBuilder::new()
+                        .num_threads(n)
+                        .thread_name("stochastic_collision".into())
+                        .build(),
+                ),
+                inline: false,
+            },
+        }
+    }
+
+    /// Number of threads working on a parallel stage.
+    pub fn threads(&self) -> usize {
+        if self.inline {
+            1
+        } else if let Some(pool) = &self.own {
+            pool.thread_num()
+        } else {
+            compute_pool().thread_num().max(1)
+        }
+    }
+
+    /// Maps `f` over `chunks` of `items` in parallel; the results come back in chunk order
+    /// (deterministic whatever the thread count).
+    pub(crate) fn map_chunks<T: Sync, R: Send + 'static>(
+        &self,
+        items: &[T],
+        chunk: usize,
+        f: impl Fn(&[T]) -> R + Sync,
+    ) -> Vec<R> {
+        let chunk = chunk.max(1);
+        if self.inline || items.len() <= chunk {
+            return items.chunks(chunk).map(&f).collect();
+        }
+        let f = &f;
+        match &self.own {
+            // Own threads only: the calling thread waits (exactly `n` threads work).
+            Some(pool) => pool.scope_with_executor(false, None, |s| {
+                for c in items.chunks(chunk) {
+                    s.spawn(async move { f(c) });
+                }
+            }),
+            // The calling system may itself run on the compute pool: it must help.
+            None => compute_pool().scope(|s| {
+                for c in items.chunks(chunk) {
+                    s.spawn(async move { f(c) });
+                }
+            }),
+        }
+    }
+
+    /// Runs `f` on every item of `items` (mutably) in parallel chunks.
+    pub(crate) fn for_each_mut<T: Send>(
+        &self,
+        items: &mut [T],
+        chunk: usize,
+        f: impl Fn(&mut T) + Sync,
+    ) {
+        let chunk = chunk.max(1);
+        if self.inline || items.len() <= chunk {
+            items.iter_mut().for_each(f);
+            return;
+        }
+        let f = &f;
+        match &self.own {
+            Some(pool) => {
+                pool.scope_with_executor(false, None, |s| {
+                    for c in items.chunks_mut(chunk) {
+                        s.spawn(async move { c.iter_mut().for_each(f) });
+                    }
+                });
+            }
+            None => {
+                compute_pool().scope(|s| {
+                    for c in items.chunks_mut(chunk) {
+                        s.spawn(async move { c.iter_mut().for_each(f) });
+                    }
+                });
+            }
+        }
+    }
+
+    /// A chunk size giving each thread a few chunks (load balance) of at least `min` items.
+    pub(crate) fn chunk_size(&self, n: usize, min: usize) -> usize {
+        n.div_ceil(self.threads() * 4).max(min)
+    }
+}
+
+fn compute_pool() -> &'static ComputeTaskPool {
+    ComputeTaskPool::get_or_init(|| {
+        TaskPoolBuilder::new()
+            .num_threads(bevy_tasks::available_parallelism())
+            .build()
+    })
+}

@@ -1,0 +1,250 @@
+//! Prepare stage: poses, refit of deformed meshes, validation, world boxes.
+use std::sync::Arc;
+use std::time::Instant;
+
+use bevy_ecs::entity::{EntityHashMap, EntityHashSet};
+use bevy_ecs::prelude::*;
+use glam::{Mat3, Vec3};
+
+use super::components::{
+    Collider, ColliderPose, CollisionLayers, Deformable, Fidelity, SelfCollision,
+};
+use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::events::{CollisionError, CollisionErrorKind};
+use super::plugin::CollisionConfig;
+use super::pool::CollisionTaskPool;
+use crate::adb::AdbTree;
+use crate::bvh::CollisionMesh;
+use crate::geometry::{Aabb, Pose};
+use crate::mesh::MeshError;
+
+/// The geometry of one entity in this run: a shared rigid tree or a deformable mesh.
+#[derive(Debug, Clone)]
+pub enum Geometry {
+    /// A rigid collider's shared ADB-tree (and BVH).
+    Rigid(Arc<AdbTree>),
+    /// A deformable mesh as refitted in this run.
+    Deformable(Arc<CollisionMesh>),
+}
+
+impl Geometry {
+    /// The mesh and its BVH.
+    #[inline]
+    pub fn mesh(&self) -> &CollisionMesh {
+        match self {
+            Geometry::Rigid(t) => t.collision_mesh(),
+            Geometry::Deformable(m) => m,
+        }
+    }
+
+    /// The ADB-tree (rigid colliders only).
+    #[inline]
+    pub fn adb(&self) -> Option<&AdbTree> {
+        match self {
+            Geometry::Rigid(t) => Some(t),
+            Geometry::Deformable(_) => None,
+        }
+    }
+}
+
+/// One valid collider as the pipeline sees it in this run.
+#[derive(Debug, Clone)]
+pub struct ColliderEntry {
+    /// The entity.
+    pub entity: Entity,
+    /// Its geometry.
+    pub geometry: Geometry,
+    /// Its pose.
+    pub pose: Pose,
+    /// Its world box (inflated by the configured margin).
+    pub aabb: Aabb,
+    /// Its fidelity.
+    pub fidelity: Fidelity,
+    /// Its layers.
+    pub layers: CollisionLayers,
+    /// Whether it has the [`SelfCollision`] marker and is deformable.
+    pub self_collision: bool,
+    /// Translation since the last run (an estimate of speed × time step).
+    pub motion: Vec3,
+}
+
+/// The colliders of the current run, sorted by entity (read-only for users: what the stages
+/// saw, valid until the next run starts).
+#[derive(Resource, Debug, Default)]
+pub struct ColliderFrame {
+    pub(crate) entries: Vec<ColliderEntry>,
+    pub(crate) index: EntityHashMap<u32>,
+}
+
+impl ColliderFrame {
+    /// The valid colliders of the last run, sorted by entity.
+    pub fn entries(&self) -> &[ColliderEntry] {
+        &self.entries
+    }
+
+    /// The entry of `entity`, if it was a valid collider in the last run.
+    pub fn get(&self, entity: Entity) -> Option<&ColliderEntry> {
+        self.index.get(&entity).map(|&i| &self.entries[i as usize])
+    }
+}
+
+/// What Prepare remembers between runs.
+#[derive(Resource, Debug, Default)]
+pub struct PrepareState {
+    invalid: EntityHashSet,
+    last_translation: EntityHashMap<Vec3>,
+}
+
+/// Run condition: some deformable mesh has new positions.
+pub fn any_stale(q: Query<&Deformable>) -> bool {
+    q.iter().any(|d| d.stale)
+}
+
+/// Copies `GlobalTransform` into [`ColliderPose`] (rotation and translation).
+#[cfg(feature = "transform")]
+pub fn sync_global_transforms(
+    mut q: Query<
+        (
+            &bevy_transform::components::GlobalTransform,
+            &mut ColliderPose,
+        ),
+        Changed<bevy_transform::components::GlobalTransform>,
+    >,
+) {
+    for (gt, mut pose) in &mut q {
+        let (_, rotation, translation) = gt.to_scale_rotation_translation();
+        pose.0 = Pose::new(translation, rotation);
+    }
+}
+
+/// Refits the BVHs of deformable meshes whose positions changed, in parallel.
+pub fn refit_deformables(
+    mut q: Query<(Entity, &mut Deformable)>,
+    mut frame: ResMut<ColliderFrame>,
+    pool: Res<CollisionTaskPool>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    let start = Instant::now();
+    // Last run's entries hold clones of the meshes' `Arc`s: drop them so refits happen in place.
+    frame.entries.clear();
+    frame.index.clear();
+    let mut stale: Vec<(Entity, Mut<Deformable>, Option<MeshError>)> = q
+        .iter_mut()
+        .filter(|(_, d)| d.stale)
+        .map(|(e, d)| (e, d, None))
+        .collect();
+    let chunk = pool.chunk_size(stale.len(), 1);
+    pool.for_each_mut(&mut stale, chunk, |(_, d, err)| {
+        let d = &mut **d;
+        d.stale = false;
+        *err = Arc::make_mut(&mut d.mesh).set_positions(&d.positions).err();
+    });
+    for (_, d, err) in &mut stale {
+        d.broken = err.take();
+    }
+    diag.record(Stage::Refit, start.elapsed(), stale.len() as u64);
+}
+
+/// Validates every collider and builds the run's [`ColliderFrame`] (sorted by entity).
+#[allow(clippy::type_complexity)]
+pub fn gather_colliders(
+    q: Query<
+        (
+            Entity,
+            &ColliderPose,
+            Option<&Collider>,
+            Option<&Deformable>,
+            Option<&Fidelity>,
+            Option<&CollisionLayers>,
+            Has<SelfCollision>,
+        ),
+        Or<(With<Collider>, With<Deformable>)>,
+    >,
+    config: Res<CollisionConfig>,
+    mut frame: ResMut<ColliderFrame>,
+    mut state: ResMut<PrepareState>,
+    mut errors: MessageWriter<CollisionError>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    let start = Instant::now();
+    let frame = &mut *frame;
+    let state = &mut *state;
+    frame.entries.clear();
+    frame.index.clear();
+    let mut now_invalid = EntityHashSet::default();
+    for (entity, pose, collider, deformable, fidelity, layers, self_marker) in &q {
+        let (geometry, default_fidelity, problem) = match (deformable, collider) {
+            (Some(d), _) => (
+                Geometry::Deformable(d.mesh.clone()),
+                Fidelity::Exact,
+                d.broken.clone().map(CollisionErrorKind::Mesh),
+            ),
+            (None, Some(c)) => (
+                Geometry::Rigid(c.tree().clone()),
+                config.default_fidelity,
+                None,
+            ),
+            (None, None) => continue,
+        };
+        let problem = problem.or_else(|| check_pose(&pose.0).err());
+        if let Some(kind) = problem {
+            if !state.invalid.contains(&entity) {
+                errors.write(CollisionError { entity, kind });
+            }
+            now_invalid.insert(entity);
+            continue;
+        }
+        let pose = normalized(&pose.0);
+        let aabb =
+            world_aabb(&geometry.mesh().bvh().root_aabb(), &pose).inflated(config.aabb_margin);
+        let last = state
+            .last_translation
+            .insert(entity, pose.translation)
+            .unwrap_or(pose.translation);
+        frame.entries.push(ColliderEntry {
+            entity,
+            self_collision: self_marker && deformable.is_some(),
+            geometry,
+            pose,
+            aabb,
+            fidelity: fidelity.copied().unwrap_or(default_fidelity),
+            layers: layers.copied().unwrap_or_default(),
+            motion: pose.translation - last,
+        });
+    }
+    state.invalid = now_invalid;
+    if state.last_translation.len() > 2 * frame.entries.len() + 64 {
+        let alive: EntityHashSet = frame.entries.iter().map(|e| e.entity).collect();
+        state.last_translation.retain(|e, _| alive.contains(e));
+    }
+    frame.entries.sort_unstable_by_key(|e| e.entity);
+    for (i, e) in frame.entries.iter().enumerate() {
+        frame.index.insert(e.entity, i as u32);
+    }
+    diag.record(Stage::Prepare, start.elapsed(), frame.entries.len() as u64);
+}
+
+fn check_pose(pose: &Pose) -> Result<(), CollisionErrorKind> {
+    let finite = pose.translation.is_finite() && pose.rotation.is_finite();
+    let len = pose.rotation.length();
+    if !finite || !(0.5..=2.0).contains(&len) {
+        return Err(CollisionErrorKind::InvalidPose {
+            translation: pose.translation.to_array(),
+            rotation: pose.rotation.to_array(),
+        });
+    }
+    Ok(())
+}
+
+fn normalized(pose: &Pose) -> Pose {
+    Pose::new(pose.translation, pose.rotation.normalize())
+}
+
+/// The world box of a local box under a rigid pose.
+pub(crate) fn world_aabb(local: &Aabb, pose: &Pose) -> Aabb {
+    let center = pose.transform_point(local.center());
+    let m = Mat3::from_quat(pose.rotation);
+    let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let half = abs * local.half_extents();
+    Aabb::new(center - half, center + half)
+}

@@ -1,0 +1,290 @@
+//! Response stage: built-in responses that consume the [`ContactQueue`], as optional plugins.
+//!
+//! - [`ImpulseResponsePlugin`]: simple rigid bodies ([`Velocity`], optional [`Mass`]):
+//!   integrates velocities under gravity before the pipeline, and resolves contacts with
+//!   restitution impulses and position correction. Bodies without `Velocity` are static.
+//! - [`PenaltyResponsePlugin`]: deformable meshes: pushes the vertices of the contact triangles
+//!   apart along the contact normal (position correction), as a penalty force would.
+//!
+//! Each consumes contacts in priority order within the response budget
+//! ([`CollisionConfig::response_budget`](super::CollisionConfig::response_budget)); the
+//! contacts it leaves stay queued for the next run.
+//!
+//! # Writing your own response
+//! A system in [`CollisionSystems::Response`] that takes the contacts it handles:
+//! ```
+//! use bevy_app::prelude::*;
+//! use bevy_ecs::prelude::*;
+//! use stochastic_collision::prelude::*;
+//!
+//! #[derive(Component)]
+//! struct Health(f32);
+//!
+//! fn damage(mut queue: ResMut<ContactQueue>, mut health: Query<&mut Health>) {
+//!     queue.consume(|c| match health.get_mut(c.b) {
+//!         Ok(mut h) => {
+//!             h.0 -= c.depth * c.probability as f32;
+//!             true // consumed
+//!         }
+//!         Err(_) => false, // not ours: leave it to other responses
+//!     });
+//! }
+//!
+//! let mut app = App::new();
+//! app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate))
+//!     .add_systems(PostUpdate, damage.in_set(CollisionSystems::Response));
+//! app.world_mut().resource_mut::<ContactQueue>().enable();
+//! ```
+//!
+//! [`CollisionSystems::Response`]: super::CollisionSystems::Response
+use std::time::Instant;
+
+use bevy_app::prelude::*;
+use bevy_ecs::intern::Interned;
+use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleLabel;
+use glam::Vec3;
+
+use super::components::{ColliderPose, Deformable};
+use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::events::{Contact, ContactQueue};
+use super::schedule::CollisionSystems;
+
+/// Linear velocity of a simple rigid body (units per second).
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+pub struct Velocity(pub Vec3);
+
+/// Mass of a body with [`Velocity`] (default 1).
+#[derive(Component, Debug, Clone, Copy, PartialEq)]
+pub struct Mass(pub f32);
+
+impl Default for Mass {
+    fn default() -> Self {
+        Self(1.0)
+    }
+}
+
+/// Settings of [`ImpulseResponsePlugin`] (a resource).
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct ImpulseSettings {
+    /// Gravity applied to bodies with [`Velocity`].
+    pub gravity: Vec3,
+    /// Time step of the integration (the schedule's step).
+    pub dt: f32,
+    /// Bounciness in `[0, 1]`.
+    pub restitution: f32,
+    /// Fraction of the penetration corrected per run.
+    pub correction: f32,
+    /// Penetration left uncorrected (avoids jitter).
+    pub slop: f32,
+    /// Velocity damping per second (air drag, rolling friction).
+    pub damping: f32,
+}
+
+impl Default for ImpulseSettings {
+    fn default() -> Self {
+        Self {
+            gravity: Vec3::new(0.0, -9.81, 0.0),
+            dt: 1.0 / 60.0,
+            restitution: 0.2,
+            correction: 0.4,
+            slop: 0.005,
+            damping: 0.1,
+        }
+    }
+}
+
+/// Impulse response for simple rigid bodies (see the [module docs](self)). Add it after
+/// [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin), with the same schedule.
+pub struct ImpulseResponsePlugin {
+    /// The schedule of the collision plugin.
+    pub schedule: Interned<dyn ScheduleLabel>,
+    /// Initial settings.
+    pub settings: ImpulseSettings,
+}
+
+impl ImpulseResponsePlugin {
+    /// The response in `schedule` with default settings.
+    pub fn in_schedule(schedule: impl ScheduleLabel) -> Self {
+        Self {
+            schedule: schedule.intern(),
+            settings: ImpulseSettings::default(),
+        }
+    }
+}
+
+impl Plugin for ImpulseResponsePlugin {
+    fn build(&self, app: &mut App) {
+        app.insert_resource(self.settings)
+            .init_resource::<ContactQueue>()
+            .add_systems(
+                self.schedule,
+                (
+                    integrate_velocities.before(CollisionSystems::Prepare),
+                    impulse_response.in_set(CollisionSystems::Response),
+                ),
+            );
+        app.world_mut().resource_mut::<ContactQueue>().enable();
+    }
+}
+
+/// Moves bodies with [`Velocity`] by one step under gravity.
+pub fn integrate_velocities(
+    settings: Res<ImpulseSettings>,
+    mut q: Query<(&mut Velocity, &mut ColliderPose)>,
+) {
+    let dt = settings.dt;
+    let keep = (1.0 - settings.damping * dt).clamp(0.0, 1.0);
+    for (mut v, mut pose) in &mut q {
+        v.0 = (v.0 + settings.gravity * dt) * keep;
+        pose.0.translation += v.0 * dt;
+    }
+}
+
+/// Resolves rigid contacts (neither entity deformable) in priority order.
+pub fn impulse_response(
+    settings: Res<ImpulseSettings>,
+    mut queue: ResMut<ContactQueue>,
+    mut bodies: Query<(&mut ColliderPose, Option<&mut Velocity>, Option<&Mass>)>,
+    deformables: Query<(), With<Deformable>>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    let start = Instant::now();
+    let n = queue.consume(|c| {
+        if c.a == c.b || deformables.contains(c.a) || deformables.contains(c.b) {
+            return false;
+        }
+        if let Ok([a, b]) = bodies.get_many_mut([c.a, c.b]) {
+            resolve(&settings, c, a, b);
+        }
+        true
+    });
+    diag.record(Stage::Response, start.elapsed(), n as u64);
+}
+
+type Body<'a> = (
+    Mut<'a, ColliderPose>,
+    Option<Mut<'a, Velocity>>,
+    Option<&'a Mass>,
+);
+
+fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>) -> f32 {
+    match (v, m) {
+        (None, _) => 0.0,
+        (Some(_), Some(m)) if m.0 > 0.0 => 1.0 / m.0,
+        (Some(_), _) => 1.0,
+    }
+}
+
+fn resolve(s: &ImpulseSettings, c: &Contact, a: Body, b: Body) {
+    let (mut pa, mut va, ma) = a;
+    let (mut pb, mut vb, mb) = b;
+    let (ia, ib) = (inverse_mass(&va, ma), inverse_mass(&vb, mb));
+    let inv = ia + ib;
+    if inv == 0.0 || !c.normal.is_finite() || c.normal == Vec3::ZERO {
+        return;
+    }
+    let n = c.normal;
+    let vel = |v: &Option<Mut<Velocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
+    let vn = (vel(&vb) - vel(&va)).dot(n);
+    if vn < 0.0 {
+        let j = -(1.0 + s.restitution) * vn / inv;
+        if let Some(v) = &mut va {
+            v.0 -= n * j * ia;
+        }
+        if let Some(v) = &mut vb {
+            v.0 += n * j * ib;
+        }
+    }
+    let push = (c.depth - s.slop).max(0.0) * s.correction / inv;
+    if push > 0.0 {
+        if ia > 0.0 {
+            pa.0.translation -= n * push * ia;
+        }
+        if ib > 0.0 {
+            pb.0.translation += n * push * ib;
+        }
+    }
+}
+
+/// Settings of [`PenaltyResponsePlugin`] (a resource).
+#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+pub struct PenaltySettings {
+    /// Fraction of the penetration corrected per run (a stiffness).
+    pub stiffness: f32,
+    /// Largest displacement of a vertex per contact.
+    pub max_step: f32,
+}
+
+impl Default for PenaltySettings {
+    fn default() -> Self {
+        Self {
+            stiffness: 0.5,
+            max_step: 0.05,
+        }
+    }
+}
+
+/// Penalty response for deformable meshes (see the [module docs](self)).
+pub struct PenaltyResponsePlugin {
+    /// The schedule of the collision plugin.
+    pub schedule: Interned<dyn ScheduleLabel>,
+    /// Initial settings.
+    pub settings: PenaltySettings,
+}
+
+impl PenaltyResponsePlugin {
+    /// The response in `schedule` with default settings.
+    pub fn in_schedule(schedule: impl ScheduleLabel) -> Self {
+        Self {
+            schedule: schedule.intern(),
+            settings: PenaltySettings::default(),
+        }
+    }
+}
+
+impl Plugin for PenaltyResponsePlugin {
+    fn build(&self, app: &mut App) {
+        app.insert_resource(self.settings)
+            .init_resource::<ContactQueue>()
+            .add_systems(
+                self.schedule,
+                penalty_response.in_set(CollisionSystems::Response),
+            );
+        app.world_mut().resource_mut::<ContactQueue>().enable();
+    }
+}
+
+/// Pushes apart the vertices of deformable contact triangles, in priority order.
+pub fn penalty_response(
+    settings: Res<PenaltySettings>,
+    mut queue: ResMut<ContactQueue>,
+    mut meshes: Query<(&mut Deformable, &ColliderPose)>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    let start = Instant::now();
+    let n = queue.consume(|c| {
+        let Some(tris) = c.triangles else {
+            return false;
+        };
+        let (da, db) = (meshes.contains(c.a), meshes.contains(c.b));
+        if !da && !db {
+            return false;
+        }
+        let step = (c.depth * settings.stiffness).min(settings.max_step);
+        // Both sides move half if both are deformable (or it is a self-contact).
+        let share = if da && db { 0.5 } else { 1.0 };
+        for (entity, tri, sign) in [(c.a, tris.a, -1.0f32), (c.b, tris.b, 1.0)] {
+            if let Ok((mut mesh, pose)) = meshes.get_mut(entity) {
+                let local = pose.0.rotation.inverse() * (c.normal * (sign * step * share));
+                let t = mesh.mesh.mesh().triangles()[tri as usize];
+                let p = mesh.positions_mut();
+                for v in t {
+                    p[v as usize] += local;
+                }
+            }
+        }
+        true
+    });
+    diag.record(Stage::Response, start.elapsed(), n as u64);
+}

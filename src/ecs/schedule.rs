@@ -1,0 +1,28 @@
+//! The public, chained system sets of the collision pipeline.
+use bevy_ecs::prelude::*;
+
+/// The stages of one run of the collision pipeline, chained in this order in the plugin's
+/// schedule. Order your systems around them, for example a game's reaction
+/// `.after(CollisionSystems::Report)` or a custom response `.in_set(CollisionSystems::Response)`.
+///
+/// Every stage runs only when some entity needs it (run conditions): with no deformable mesh
+/// there is no refit, with no [`SelfCollision`](super::SelfCollision) marker no self pass, with
+/// no tracked pair no tracking; [`CollisionDiagnostics`](super::CollisionDiagnostics) shows
+/// idle stages as not run.
+#[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CollisionSystems {
+    /// Poses from `GlobalTransform` or [`ColliderPose`](super::ColliderPose), refit of
+    /// deformed meshes, validation, world boxes.
+    Prepare,
+    /// Candidate pairs from the world boxes (sweep and prune), filtered by layers.
+    BroadPhase,
+    /// Per candidate pair, in parallel: exact, ADB (cut by the budget) or bounds.
+    NarrowPhase,
+    /// Tracked pairs and self-collision of deformable meshes, in parallel.
+    Tracking,
+    /// Compare with the last run: started/ended/contact messages, `CollidingEntities`,
+    /// observer events, the contact queue.
+    Report,
+    /// Responses consuming the contact queue (built-in plugins or your own systems).
+    Response,
+}

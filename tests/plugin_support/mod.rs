@@ -1,0 +1,66 @@
+//! Helpers shared by the plugin tests: a headless app, an event log.
+#![allow(dead_code)]
+
+use bevy_app::prelude::*;
+use bevy_ecs::prelude::*;
+use stochastic_collision::prelude::*;
+
+/// Every collision message seen by [`log_events`], in order.
+#[derive(Resource, Default, Debug, Clone, PartialEq)]
+pub struct EventLog {
+    pub started: Vec<(Entity, Entity)>,
+    pub ended: Vec<(Entity, Entity)>,
+    pub contacts: Vec<Contact>,
+    pub errors: Vec<CollisionError>,
+}
+
+/// Appends every collision message to the [`EventLog`].
+pub fn log_events(
+    mut log: ResMut<EventLog>,
+    mut started: MessageReader<CollisionStarted>,
+    mut ended: MessageReader<CollisionEnded>,
+    mut contacts: MessageReader<Contact>,
+    mut errors: MessageReader<CollisionError>,
+) {
+    log.started
+        .extend(started.read().map(|e| (e.entity, e.other)));
+    log.ended.extend(ended.read().map(|e| (e.entity, e.other)));
+    log.contacts.extend(contacts.read().copied());
+    log.errors.extend(errors.read().cloned());
+}
+
+/// A headless app: the plugin in `PostUpdate` with `config` and `threads`, the log in `Last`.
+pub fn app_with(config: CollisionConfig, threads: usize) -> App {
+    let mut app = App::new();
+    app.add_plugins(
+        StochasticCollisionPlugin::in_schedule(PostUpdate)
+            .with_config(config)
+            .with_threads(threads),
+    )
+    .init_resource::<EventLog>()
+    .add_systems(Last, log_events);
+    app
+}
+
+/// [`app_with`] with an unlimited budget, one thread.
+pub fn app() -> App {
+    app_with(
+        CollisionConfig {
+            budget: FrameBudget::Unlimited,
+            ..Default::default()
+        },
+        1,
+    )
+}
+
+pub fn ball(radius: f32) -> Collider {
+    Collider::new(generate::icosphere(radius, 2))
+}
+
+pub fn at(x: f32, y: f32, z: f32) -> ColliderPose {
+    ColliderPose::from_translation(Vec3::new(x, y, z))
+}
+
+pub fn log(app: &App) -> &EventLog {
+    app.world().resource::<EventLog>()
+}
