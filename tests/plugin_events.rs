@@ -8,23 +8,13 @@ use bevy_ecs::schedule::ScheduleLabel;
 use plugin_support::*;
 use stochastic_collision::prelude::*;
 
-fn pair(a: Entity, b: Entity) -> (Entity, Entity) {
-    (a.min(b), a.max(b))
-}
-
 #[test]
 fn started_and_ended_once_per_contact_interval() {
     for fidelity in [Fidelity::Exact, Fidelity::Adb { p_min: 0.99 }] {
         let mut app = app();
         let ball = ball(1.0);
-        let a = app
-            .world_mut()
-            .spawn((ball.clone(), at(0.0, 0.0, 0.0), fidelity))
-            .id();
-        let b = app
-            .world_mut()
-            .spawn((ball, at(5.0, 0.0, 0.0), fidelity))
-            .id();
+        let a = spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0), fidelity));
+        let b = spawn(&mut app, (ball, at(5.0, 0.0, 0.0), fidelity));
         // b travels from x = 5 to x = -5 and back twice: contact while |x| < 2.
         let path: Vec<f32> = (0..=40)
             .map(|i| 5.0 - 0.5 * i as f32)
@@ -67,15 +57,9 @@ fn started_and_ended_once_per_contact_interval() {
 fn despawn_mid_contact_ends_the_contact() {
     let mut app = app();
     let ball = ball(1.0);
-    let a = app
-        .world_mut()
-        .spawn((ball.clone(), at(0.0, 0.0, 0.0)))
-        .id();
-    let b = app
-        .world_mut()
-        .spawn((ball.clone(), at(1.5, 0.0, 0.0)))
-        .id();
-    let c = app.world_mut().spawn((ball, at(-1.5, 0.0, 0.0))).id();
+    let a = spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0)));
+    let b = spawn(&mut app, (ball.clone(), at(1.5, 0.0, 0.0)));
+    let c = spawn(&mut app, (ball, at(-1.5, 0.0, 0.0)));
     app.update();
     let mut both = [b, c];
     both.sort();
@@ -99,18 +83,18 @@ fn despawn_mid_contact_ends_the_contact() {
 fn layers_filter_pairs() {
     let mut app = app();
     let ball = ball(1.0);
-    let a = app
-        .world_mut()
-        .spawn((ball.clone(), at(0.0, 0.0, 0.0), CollisionLayers::new(1, 2)))
-        .id();
-    let b = app
-        .world_mut()
-        .spawn((ball.clone(), at(1.5, 0.0, 0.0), CollisionLayers::new(1, 2)))
-        .id();
-    let c = app
-        .world_mut()
-        .spawn((ball, at(-1.5, 0.0, 0.0), CollisionLayers::new(2, 1)))
-        .id();
+    let a = spawn(
+        &mut app,
+        (ball.clone(), at(0.0, 0.0, 0.0), CollisionLayers::new(1, 2)),
+    );
+    let b = spawn(
+        &mut app,
+        (ball.clone(), at(1.5, 0.0, 0.0), CollisionLayers::new(1, 2)),
+    );
+    let c = spawn(
+        &mut app,
+        (ball, at(-1.5, 0.0, 0.0), CollisionLayers::new(2, 1)),
+    );
     app.update();
     assert_eq!(log(&app).started, vec![pair(a, c)]);
     assert!(!app.world().get::<CollidingEntities>(b).unwrap().contains(a));
@@ -124,11 +108,8 @@ fn observers_fire_for_opted_in_entities_even_when_added_later() {
     let mut app = app();
     app.init_resource::<Observed>();
     let ball = ball(1.0);
-    let a = app
-        .world_mut()
-        .spawn((ball.clone(), at(0.0, 0.0, 0.0)))
-        .id();
-    let b = app.world_mut().spawn((ball, at(5.0, 0.0, 0.0))).id();
+    let a = spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0)));
+    let b = spawn(&mut app, (ball, at(5.0, 0.0, 0.0)));
     app.update();
     // Opt in after spawning (avian#1066).
     app.world_mut()
@@ -188,8 +169,8 @@ fn a_reader_running_less_often_than_the_collision_schedule_sees_every_event() {
             .chain(),
     );
     let ball = ball(1.0);
-    app.world_mut().spawn((ball.clone(), at(0.0, 0.0, 0.0)));
-    let b = app.world_mut().spawn((ball, at(5.0, 0.0, 0.0))).id();
+    spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0)));
+    let b = spawn(&mut app, (ball, at(5.0, 0.0, 0.0)));
     // Move b once per collision run: in and out of contact many times.
     app.add_systems(
         CollisionStep,
@@ -219,18 +200,15 @@ fn bounds_fidelity_collides_on_box_overlap() {
     let mut app = app();
     let ball = ball(1.0);
     // Diagonal: boxes overlap, spheres do not.
-    let a = app
-        .world_mut()
-        .spawn((ball.clone(), at(0.0, 0.0, 0.0), Fidelity::Bounds))
-        .id();
-    let b = app
-        .world_mut()
-        .spawn((ball.clone(), at(1.7, 1.7, 0.0), Fidelity::Bounds))
-        .id();
-    let c = app
-        .world_mut()
-        .spawn((ball, at(-1.7, -1.7, 0.0), Fidelity::Exact))
-        .id();
+    let a = spawn(
+        &mut app,
+        (ball.clone(), at(0.0, 0.0, 0.0), Fidelity::Bounds),
+    );
+    let b = spawn(
+        &mut app,
+        (ball.clone(), at(1.7, 1.7, 0.0), Fidelity::Bounds),
+    );
+    let c = spawn(&mut app, (ball, at(-1.7, -1.7, 0.0), Fidelity::Exact));
     app.update();
     assert_eq!(log(&app).started, vec![pair(a, b)]);
     assert!(!app.world().get::<CollidingEntities>(c).unwrap().contains(a));

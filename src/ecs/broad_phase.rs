@@ -8,6 +8,9 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 
+use super::components::CollisionLayers;
+use crate::geometry::Aabb;
+
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::prepare::ColliderFrame;
 
@@ -39,6 +42,7 @@ impl CandidatePairs {
 pub struct BroadPhaseState {
     order: Vec<Entity>,
     axis: usize,
+    second: usize,
     last_axis: usize,
 }
 
@@ -86,50 +90,83 @@ pub fn sweep_and_prune(
             order[j] = v;
         }
     }
+    // Sweep over compact copies in sorted order (the entries are large and scattered). Each
+    // box also gets a 64-bit mask of the slabs it covers along the second axis: one AND
+    // rejects most boxes that overlap on the sweep axis only (rows of a pile).
+    let second = state.second;
+    let (lo, hi) = entries.iter().fold((f32::MAX, f32::MIN), |(lo, hi), e| {
+        (lo.min(e.aabb.min[second]), hi.max(e.aabb.max[second]))
+    });
+    let scale = 63.999 / (hi - lo).max(1e-6);
+    let slab = |v: f32| (((v - lo) * scale).clamp(0.0, 63.0)) as u32;
+    let sweep: Vec<(f32, u64)> = order
+        .iter()
+        .map(|&i| {
+            let b = &entries[i as usize].aabb;
+            let (s0, s1) = (slab(b.min[second]), slab(b.max[second]));
+            let mask = (u64::MAX >> (63 - s1)) & (u64::MAX << s0);
+            (b.min[axis], mask)
+        })
+        .collect();
+    let boxes: Vec<(Aabb, CollisionLayers)> = order
+        .iter()
+        .map(|&i| (entries[i as usize].aabb, entries[i as usize].layers))
+        .collect();
     let pairs = &mut out.pairs;
     pairs.clear();
-    for (k, &i) in order.iter().enumerate() {
-        let ei = &entries[i as usize];
-        let max = ei.aabb.max[axis];
-        for &j in &order[k + 1..] {
-            let ej = &entries[j as usize];
-            if ej.aabb.min[axis] > max {
+    for (k, (bi, li)) in boxes.iter().enumerate() {
+        let (max, mask) = (bi.max[axis], sweep[k].1);
+        for (m, &(min, mj)) in sweep[k + 1..].iter().enumerate() {
+            if min > max {
                 break;
             }
-            if !ei.aabb.intersects(&ej.aabb) || !ei.layers.interacts_with(&ej.layers) {
+            if mask & mj == 0 {
                 continue;
             }
-            pairs.push(CandidatePair {
-                a: i.min(j),
-                b: i.max(j),
-            });
+            let (bj, lj) = &boxes[k + 1 + m];
+            if bi.intersects(bj) && li.interacts_with(lj) {
+                let (i, j) = (order[k], order[k + 1 + m]);
+                pairs.push(CandidatePair {
+                    a: i.min(j),
+                    b: i.max(j),
+                });
+            }
         }
     }
-    pairs.sort_unstable();
+    pairs.sort_unstable_by_key(|p| (u64::from(p.a) << 32) | u64::from(p.b));
     state.order = order.iter().map(|&i| entries[i as usize].entity).collect();
     diag.record(Stage::BroadPhase, start.elapsed(), pairs.len() as u64);
 }
 
+/// Picks the sweep axis: the one along which the box centres spread most, measured by the
+/// interquartile range of a sample (robust: one body falling away must not swing the axis).
+/// Re-chosen only when another axis spreads 1.5 times as much. The second axis (for the slab
+/// masks) is the next most spread one.
 fn choose_axis(frame: &ColliderFrame, state: &mut BroadPhaseState) {
-    let n = frame.entries.len() as f32;
-    if n < 2.0 {
+    let n = frame.entries.len();
+    if n < 2 {
         return;
     }
-    let (mut sum, mut sq) = (glam::Vec3::ZERO, glam::Vec3::ZERO);
-    for e in &frame.entries {
-        let c = e.aabb.center();
-        sum += c;
-        sq += c * c;
+    let step = n.div_ceil(64);
+    let mut spread = [0.0f32; 3];
+    let mut sample: Vec<f32> = Vec::with_capacity(64);
+    for (axis, s) in spread.iter_mut().enumerate() {
+        sample.clear();
+        sample.extend(
+            frame
+                .entries
+                .iter()
+                .step_by(step)
+                .map(|e| e.aabb.center()[axis]),
+        );
+        sample.sort_unstable_by(f32::total_cmp);
+        let q = |f: f32| sample[((sample.len() - 1) as f32 * f) as usize];
+        *s = q(0.75) - q(0.25);
     }
-    let var = sq / n - (sum / n) * (sum / n);
-    let best = if var.x >= var.y && var.x >= var.z {
-        0
-    } else if var.y >= var.z {
-        1
-    } else {
-        2
-    };
-    if state.order.is_empty() || var[best] > 2.0 * var[state.axis] {
+    let best = (0..3).fold(0, |b, a| if spread[a] > spread[b] { a } else { b });
+    if state.order.is_empty() || spread[best] > 1.5 * spread[state.axis] {
         state.axis = best;
     }
+    let (u, v) = ((state.axis + 1) % 3, (state.axis + 2) % 3);
+    state.second = if spread[u] >= spread[v] { u } else { v };
 }

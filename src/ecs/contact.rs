@@ -1,6 +1,7 @@
 //! Contact points from what a query found: an intersecting triangle pair, or an ADB witness.
 use glam::Vec3;
 
+use super::prepare::world_aabb;
 use crate::bvh::{CollisionMesh, TrianglePair};
 use crate::geometry::{Aabb, Pose};
 
@@ -31,9 +32,11 @@ fn centroid(t: &[Vec3; 3]) -> Vec3 {
     (t[0] + t[1] + t[2]) / 3.0
 }
 
-/// The contact of an intersecting triangle pair: point between the centroids, normal from the
-/// two face normals (outward normals of closed meshes: push the second along the first's
-/// normal and against its own), depth of the second triangle below the first's plane.
+/// The contact of an intersecting triangle pair: point between the centroids, normal of the
+/// larger triangle (the reference face, as in box-box manifolds: a face meeting an edge or a
+/// corner; outward normals of closed meshes push the second along the first's normal and
+/// against its own), depth of the deeper triangle behind the other's plane (the
+/// smaller of the two, so a huge triangle's far corners do not count).
 pub(crate) fn triangle_pair_contact(
     a: &CollisionMesh,
     pose_a: &Pose,
@@ -44,35 +47,42 @@ pub(crate) fn triangle_pair_contact(
     let ta = world_triangle(a, pose_a, pair.a);
     let tb = world_triangle(b, pose_b, pair.b);
     let (ca, cb) = (centroid(&ta), centroid(&tb));
-    let mut normal = (unit_normal(&ta) - unit_normal(&tb)).normalize_or_zero();
+    let (na, nb) = (unit_normal(&ta), unit_normal(&tb));
+    let area = |t: &[Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).length_squared();
+    let mut normal = if area(&ta) >= area(&tb) { na } else { -nb };
     if normal == Vec3::ZERO {
         normal = (cb - ca).normalize_or(Vec3::Y);
     }
-    let depth_b = tb
-        .iter()
-        .map(|v| (ca - *v).dot(normal))
-        .fold(0.0f32, f32::max);
-    let depth_a = ta
-        .iter()
-        .map(|v| (*v - cb).dot(normal))
-        .fold(0.0f32, f32::max);
+    // How far each triangle's corners reach behind the other's plane.
+    let behind =
+        |t: &[Vec3; 3], c: Vec3, n: Vec3| t.iter().map(|v| (c - *v).dot(n)).fold(0.0f32, f32::max);
+    let depth = behind(&tb, ca, na).min(behind(&ta, cb, nb));
     ContactPoint {
         point: (ca + cb) * 0.5,
         normal,
-        depth: depth_a.min(depth_b),
+        depth,
         triangles: Some(pair),
     }
 }
 
-/// Depth estimate from the world boxes: their overlap along `normal`, at most a quarter of
-/// the smaller box's extent along it (an ADB witness carries no depth).
-pub(crate) fn box_depth(a: &Aabb, b: &Aabb, normal: Vec3) -> f32 {
+/// Depth estimate for an ADB witness (which carries no depth): the overlap along `normal` of
+/// the witness's two tree nodes in world space, at most half the thinner node's extent along it.
+pub(crate) fn node_depth(
+    a: &CollisionMesh,
+    pose_a: &Pose,
+    b: &CollisionMesh,
+    pose_b: &Pose,
+    (na, nb): (u32, u32),
+    normal: Vec3,
+) -> f32 {
+    let box_a = world_aabb(&a.bvh().nodes()[na as usize].aabb(), pose_a);
+    let box_b = world_aabb(&b.bvh().nodes()[nb as usize].aabb(), pose_b);
     let project = |bx: &Aabb| {
         let c = bx.center().dot(normal);
         let r = bx.half_extents().dot(normal.abs());
         (c - r, c + r)
     };
-    let ((a0, a1), (b0, b1)) = (project(a), project(b));
+    let ((a0, a1), (b0, b1)) = (project(&box_a), project(&box_b));
     let overlap = (a1.min(b1) - a0.max(b0)).max(0.0);
-    overlap.min(0.5 * (a1 - a0).min(b1 - b0) * 0.5)
+    overlap.min(0.5 * (a1 - a0).min(b1 - b0))
 }

@@ -77,6 +77,11 @@ pub struct CollisionCounters {
     pub adb_pairs: u64,
     /// ADB pairs that ran out of their slice.
     pub budget_exhausted_pairs: u64,
+    /// ADB pairs not tested because the time budget's deadline had passed (answered from the
+    /// previous run, see [`Method::Coherence`](super::Method::Coherence)).
+    pub coherence_pairs: u64,
+    /// Pairs not tested because neither entity moved (see [`Method::Cached`](super::Method::Cached)).
+    pub cached_pairs: u64,
     /// Pairs tested exactly.
     pub exact_pairs: u64,
     /// `CollisionStarted` messages written.

@@ -38,7 +38,7 @@ use glam::Vec3;
 
 use super::components::{CollidingEntities, CollisionEventsEnabled};
 use super::diagnostics::{CollisionDiagnostics, Stage};
-use super::narrow_phase::{Method, PairOutcomes};
+use super::narrow_phase::{PairOutcome, PairOutcomes};
 use super::plugin::CollisionConfig;
 use crate::bvh::TrianglePair;
 use crate::mesh::MeshError;
@@ -142,7 +142,8 @@ pub struct ContactQueue {
     enabled: bool,
     queue: Vec<Contact>,
     remaining: Option<usize>,
-    /// Contacts carried over into a later run, summed over runs.
+    /// Contacts left unconsumed at the end of a run (carried into the next, or superseded
+    /// there by a newer contact of the same pair), summed over runs.
     pub deferred_total: u64,
     /// Contacts consumed by responses.
     pub consumed_total: u64,
@@ -186,21 +187,18 @@ impl ContactQueue {
     /// leaves the queue and costs one unit of budget), `false` to leave it to another response.
     pub fn consume(&mut self, mut respond: impl FnMut(&Contact) -> bool) -> usize {
         let mut consumed = 0;
-        let mut k = 0;
-        while k < self.queue.len() {
-            if self.remaining == Some(0) {
-                break;
+        let mut remaining = self.remaining;
+        self.queue.retain(|c| {
+            if remaining == Some(0) || !respond(c) {
+                return true;
             }
-            if respond(&self.queue[k]) {
-                self.queue.remove(k);
-                consumed += 1;
-                if let Some(r) = &mut self.remaining {
-                    *r -= 1;
-                }
-            } else {
-                k += 1;
+            consumed += 1;
+            if let Some(r) = &mut remaining {
+                *r -= 1;
             }
-        }
+            false
+        });
+        self.remaining = remaining;
         self.consumed_total += consumed as u64;
         consumed
     }
@@ -213,15 +211,23 @@ impl ContactQueue {
         let mut fresh_pairs: Vec<(Entity, Entity)> = fresh.iter().map(|c| (c.a, c.b)).collect();
         fresh_pairs.dedup();
         let before = self.queue.len();
+        self.deferred_total += before as u64;
         self.queue
             .retain(|c| fresh_pairs.binary_search(&(c.a, c.b)).is_err());
         self.superseded_total += (before - self.queue.len()) as u64;
-        self.deferred_total += self.queue.len() as u64;
         self.queue.extend(fresh);
-        self.queue.sort_by(|x, y| {
+        self.queue.sort_unstable_by(|x, y| {
             y.priority
                 .total_cmp(&x.priority)
                 .then((x.a, x.b).cmp(&(y.a, y.b)))
+                .then(x.frame.cmp(&y.frame))
+                .then(x.triangles.cmp(&y.triangles))
+                .then(
+                    x.point
+                        .to_array()
+                        .map(f32::to_bits)
+                        .cmp(&y.point.to_array().map(f32::to_bits)),
+                )
         });
     }
 }
@@ -243,9 +249,10 @@ pub fn report_collisions(
 ) {
     let start = Instant::now();
     let frame = diag.frame;
-    outcomes
-        .outcomes
-        .sort_by_key(|o| (o.a, o.b, o.method == Method::SelfCollision));
+    let key = |o: &PairOutcome| (o.a, o.b);
+    if !outcomes.outcomes.is_sorted_by_key(key) {
+        outcomes.outcomes.sort_by_key(key);
+    }
     let now: Vec<(Entity, Entity)> = outcomes
         .outcomes
         .iter()

@@ -6,7 +6,6 @@
 //! workspaces; results are merged in pair order (by entity), so the outcome is the same for
 //! any number of threads.
 use std::cell::RefCell;
-use std::collections::HashMap;
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
@@ -16,13 +15,16 @@ use smallvec::SmallVec;
 use super::broad_phase::{CandidatePair, CandidatePairs};
 use super::budget::{WorkRate, pair_priority, slices};
 use super::components::Fidelity;
-use super::contact::{ContactPoint, box_depth, triangle_pair_contact};
+use super::contact::{ContactPoint, node_depth, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::plugin::{CollisionConfig, FrameBudget};
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderFrame, Geometry};
 use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
-use crate::bvh::{QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with};
+use crate::bvh::{
+    QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with, root_boxes_overlap,
+};
+use crate::geometry::Pose;
 
 /// How a pair's answer was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -37,6 +39,14 @@ pub enum Method {
     Tracking,
     /// The self-collision pass of a deformable mesh (`a == b`).
     SelfCollision,
+    /// Not tested: neither rigid entity moved since the last run (identical poses, e.g.
+    /// sleeping bodies) and the last answer was settled, so it is reused as is.
+    Cached,
+    /// Not tested: the time budget's deadline passed before the pair's turn. The answer is the
+    /// previous run's (temporal coherence), or for a new pair the oriented root-box test
+    /// (overlapping boxes give "not colliding" with probability 0.5, so the pair comes first
+    /// in the next run).
+    Coherence,
 }
 
 /// The answer for one pair in one run.
@@ -59,7 +69,7 @@ pub struct PairOutcome {
     /// The pair's priority in this run.
     pub priority: f32,
     /// Contact points (empty when not colliding).
-    pub contacts: SmallVec<[ContactPoint; 4]>,
+    pub contacts: SmallVec<[ContactPoint; 1]>,
 }
 
 impl PairOutcome {
@@ -69,7 +79,7 @@ impl PairOutcome {
         method: Method,
         node_pairs: u64,
         priority: f32,
-        contacts: SmallVec<[ContactPoint; 4]>,
+        contacts: SmallVec<[ContactPoint; 1]>,
     ) -> Self {
         let collides = !contacts.is_empty();
         Self {
@@ -92,7 +102,9 @@ impl PairOutcome {
 pub struct PairOutcomes {
     pub(crate) outcomes: Vec<PairOutcome>,
     pub(crate) tracked: Vec<CandidatePair>,
-    pub(crate) history: HashMap<(Entity, Entity), f64>,
+    /// Last answers' pairs, sorted, and the answers.
+    pub(crate) history_keys: Vec<(Entity, Entity)>,
+    pub(crate) history: Vec<PairMemory>,
     pub(crate) rate: WorkRate,
     pub(crate) exact_node_pairs: f64,
 }
@@ -104,13 +116,27 @@ impl PairOutcomes {
     }
 }
 
+/// What a pair's last answer was.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PairMemory {
+    probability: f64,
+    collides: bool,
+    settled: bool,
+    poses: (Pose, Pose),
+    contact: Option<ContactPoint>,
+}
+
 #[derive(Debug, Clone, Copy)]
 struct Job {
+    /// Position in pair order.
+    pos: u32,
     pair: CandidatePair,
     method: Method,
     p_min: f64,
     priority: f32,
     slice: u64,
+    /// Index of the pair's last answer.
+    last: Option<u32>,
 }
 
 #[derive(Default)]
@@ -148,39 +174,48 @@ pub fn narrow_phase(
     let entries = &frame.entries;
     state.outcomes.clear();
     state.tracked.clear();
+    // Candidates and the last run's answers are both sorted by entity pair: a merge join.
+    let (old_keys, old_memory) = (
+        std::mem::take(&mut state.history_keys),
+        std::mem::take(&mut state.history),
+    );
+    let mut cursor = 0;
     let mut jobs = Vec::with_capacity(candidates.pairs.len());
     for &pair in &candidates.pairs {
         let (ea, eb) = (&entries[pair.a as usize], &entries[pair.b as usize]);
-        let fidelity = ea.fidelity.combine(eb.fidelity);
-        let (method, p_min) = match fidelity {
+        let (method, p_min) = match ea.fidelity.combine(eb.fidelity) {
             Fidelity::Tracking { .. } => {
                 state.tracked.push(pair);
                 continue;
             }
             Fidelity::Bounds => (Method::Bounds, 1.0),
             Fidelity::Exact => (Method::Exact, 1.0),
-            Fidelity::Adb { p_min } => match (&ea.geometry, &eb.geometry) {
-                (Geometry::Rigid(_), Geometry::Rigid(_)) => (Method::Adb, p_min),
-                _ => (Method::Exact, 1.0),
-            },
+            Fidelity::Adb { p_min } if both_rigid(ea, eb) => (Method::Adb, p_min),
+            Fidelity::Adb { .. } => (Method::Exact, 1.0),
         };
-        let last = state.history.get(&(ea.entity, eb.entity)).copied();
-        let priority = pair_priority(last, &ea.aabb, &eb.aabb, eb.motion - ea.motion);
+        let key = (ea.entity, eb.entity);
+        while cursor < old_keys.len() && old_keys[cursor] < key {
+            cursor += 1;
+        }
+        let last = (old_keys.get(cursor) == Some(&key)).then_some(cursor as u32);
+        let p_last = last.map(|i| old_memory[i as usize].probability);
+        let priority = pair_priority(p_last, &ea.aabb, &eb.aabb, eb.motion - ea.motion);
         jobs.push(Job {
+            pos: jobs.len() as u32,
             pair,
             method,
             p_min,
             priority,
             slice: u64::MAX,
+            last,
         });
     }
-    // Highest priority first (ties by pair: deterministic).
-    jobs.sort_by(|x, y| y.priority.total_cmp(&x.priority).then(x.pair.cmp(&y.pair)));
     let (total, deadline) = node_budget(&config, &diag, state, start);
-    let adb: Vec<usize> = (0..jobs.len())
-        .filter(|&i| jobs[i].method == Method::Adb)
-        .collect();
+    let mut adb_pairs = 0u64;
     if let Some(total) = total {
+        let adb: Vec<usize> = (0..jobs.len())
+            .filter(|&i| jobs[i].method == Method::Adb)
+            .collect();
         let pr: Vec<f32> = adb.iter().map(|&i| jobs[i].priority).collect();
         for (&i, s) in adb
             .iter()
@@ -188,50 +223,76 @@ pub fn narrow_phase(
         {
             jobs[i].slice = s;
         }
+        adb_pairs = adb.len() as u64;
+    } else {
+        adb_pairs += jobs.iter().filter(|j| j.method == Method::Adb).count() as u64;
     }
+    // Highest priority first when a deadline may cut the run (buckets of priority, pair order
+    // within a bucket: linear and deterministic).
+    let order = if deadline.is_some() {
+        by_priority(&jobs)
+    } else {
+        jobs.clone()
+    };
     let ctx = Context {
         entries,
+        memory: &old_memory,
         config: &config,
         deadline,
     };
-    let chunk = pool.chunk_size(jobs.len(), 8);
-    let results = pool.map_chunks(&jobs, chunk, |c| ctx.run_chunk(c));
-    let mut outcomes: Vec<(CandidatePair, PairOutcome)> = results.into_iter().flatten().collect();
-    outcomes.sort_unstable_by_key(|(p, _)| *p);
-    state.outcomes.extend(outcomes.into_iter().map(|(_, o)| o));
-    // Learn the rate and the exact work for the next run's budget.
-    let (mut np, mut exact_np, mut exhausted) = (0u64, 0u64, 0u64);
-    for o in &state.outcomes {
+    let chunk = pool.chunk_size(order.len(), 8);
+    let results = pool.map_chunks(&order, chunk, |c| ctx.run_chunk(c));
+    // Back in pair order (by entity), whatever the processing order and thread count.
+    let mut slots: Vec<Option<(PairOutcome, PairMemory)>> = vec![None; jobs.len()];
+    for (pos, outcome, memory) in results.into_iter().flatten() {
+        slots[pos as usize] = Some((outcome, memory));
+    }
+    let c = &mut diag.counters;
+    let (mut np, mut exact_np) = (0, 0);
+    for (o, m) in slots.into_iter().flatten() {
         np += o.node_pairs;
         if o.method == Method::Exact {
             exact_np += o.node_pairs;
+            c.exact_pairs += 1;
         }
-        exhausted += u64::from(o.budget_exhausted);
+        c.budget_exhausted_pairs += u64::from(o.budget_exhausted);
+        c.coherence_pairs += u64::from(o.method == Method::Coherence);
+        c.cached_pairs += u64::from(o.method == Method::Cached);
+        state.history_keys.push((o.a, o.b));
+        state.history.push(m);
+        state.outcomes.push(o);
     }
+    c.node_pairs += np;
+    c.adb_pairs += adb_pairs;
     let elapsed = start.elapsed();
     state
         .rate
         .update(np, state.outcomes.len(), elapsed.as_secs_f64() * 1e6);
     state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * exact_np as f64;
-    state.history = state
-        .outcomes
-        .iter()
-        .map(|o| ((o.a, o.b), o.probability))
-        .collect();
     diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
-    let c = &mut diag.counters;
-    c.node_pairs += np;
-    c.adb_pairs += adb.len() as u64;
-    c.budget_exhausted_pairs += exhausted;
-    c.exact_pairs += state
-        .outcomes
-        .iter()
-        .filter(|o| o.method == Method::Exact)
-        .count() as u64;
+}
+
+/// The jobs, highest priority first: 32 buckets of `log2(priority)`, each in pair order.
+fn by_priority(jobs: &[Job]) -> Vec<Job> {
+    let bucket = |p: f32| 31 - ((p.max(1e-6).log2() * 4.0 + 16.0).clamp(0.0, 31.0) as usize);
+    let mut counts = [0usize; 33];
+    for j in jobs {
+        counts[bucket(j.priority) + 1] += 1;
+    }
+    for i in 1..33 {
+        counts[i] += counts[i - 1];
+    }
+    let mut out = jobs.to_vec();
+    for j in jobs {
+        let b = bucket(j.priority);
+        out[counts[b]] = *j;
+        counts[b] += 1;
+    }
+    out
 }
 
 /// The ADB node pairs of this run (`None`: unlimited) and, in time mode, the deadline after
-/// which pairs get only their minimum slice.
+/// which ADB pairs are answered by temporal coherence ([`Method::Coherence`]).
 fn node_budget(
     config: &CollisionConfig,
     diag: &CollisionDiagnostics,
@@ -254,19 +315,43 @@ fn node_budget(
 
 struct Context<'a> {
     entries: &'a [ColliderEntry],
+    memory: &'a [PairMemory],
     config: &'a CollisionConfig,
     deadline: Option<Instant>,
 }
 
 impl Context<'_> {
-    fn run_chunk(&self, jobs: &[Job]) -> Vec<(CandidatePair, PairOutcome)> {
+    fn run_chunk(&self, jobs: &[Job]) -> Vec<(u32, PairOutcome, PairMemory)> {
         let mut query = AdbQuery {
             k_min: self.config.k_min,
+            exact_leaves: self.config.adb_exact_leaves,
             ..AdbQuery::default()
         };
+        let mut late = false;
         with_workspaces(|exact, adb, pairs| {
             jobs.iter()
-                .map(|job| (job.pair, self.run_job(job, &mut query, exact, adb, pairs)))
+                .enumerate()
+                .map(|(k, job)| {
+                    // The clock is read every 8 pairs.
+                    if k % 8 == 0 && !late {
+                        late = self.deadline.is_some_and(|d| Instant::now() > d);
+                    }
+                    let o = self.run_job(job, late, &mut query, exact, adb, pairs);
+                    let (ea, eb) = (
+                        &self.entries[job.pair.a as usize],
+                        &self.entries[job.pair.b as usize],
+                    );
+                    let memory = PairMemory {
+                        probability: o.probability,
+                        collides: o.collides,
+                        settled: !o.budget_exhausted
+                            && o.method != Method::Coherence
+                            && both_rigid(ea, eb),
+                        poses: (ea.pose, eb.pose),
+                        contact: o.contacts.first().copied(),
+                    };
+                    (job.pos, o, memory)
+                })
                 .collect()
         })
     }
@@ -274,6 +359,7 @@ impl Context<'_> {
     fn run_job(
         &self,
         job: &Job,
+        late: bool,
         query: &mut AdbQuery,
         exact: &mut QueryWorkspace,
         adb: &mut AdbWorkspace,
@@ -295,6 +381,14 @@ impl Context<'_> {
             contacts: SmallVec::new(),
         };
         let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
+        let last = job.last.map(|i| self.memory[i as usize]);
+        if let Some(m) = last.filter(|m| m.settled && m.poses == (ea.pose, eb.pose)) {
+            out.method = Method::Cached;
+            out.collides = m.collides;
+            out.probability = m.probability;
+            out.contacts.extend(m.contact.filter(|_| m.collides));
+            return out;
+        }
         match job.method {
             Method::Bounds => {
                 out.collides = true;
@@ -302,38 +396,48 @@ impl Context<'_> {
                 out.contacts.push(bounds_contact(ea, eb));
             }
             Method::Exact if both_rigid(ea, eb) => {
+                // First hit only (stops early): one contact, as for ADB pairs.
                 let hit = intersects_with(ma, &ea.pose, mb, &eb.pose, &Default::default(), exact);
-                out.node_pairs = hit.node_pairs_visited;
-                out.collides = hit.collides;
-                out.probability = f64::from(u8::from(hit.collides));
-                if let Some(t) = hit.witness {
-                    out.contacts
-                        .push(triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t));
-                }
+                let contacts = hit
+                    .witness
+                    .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
+                    .into_iter()
+                    .collect();
+                let (ends, nodes) = ((ea.entity, eb.entity), hit.node_pairs_visited);
+                return PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts);
             }
             Method::Exact => {
                 pairs.clear();
                 intersecting_pairs(ma, &ea.pose, mb, &eb.pose, exact, pairs);
-                out.node_pairs = exact.node_pairs_visited();
-                out.collides = !pairs.is_empty();
-                out.probability = f64::from(u8::from(out.collides));
-                let max = self.config.max_self_contacts;
-                out.contacts.extend(
-                    spread(pairs, max)
-                        .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t)),
-                );
+                let contacts = spread(pairs, self.config.max_contacts_per_pair)
+                    .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
+                    .collect();
+                let (ends, nodes) = ((ea.entity, eb.entity), exact.node_pairs_visited());
+                return PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts);
+            }
+            Method::Adb if late => {
+                out.method = Method::Coherence;
+                match last {
+                    Some(m) => {
+                        out.collides = m.collides;
+                        out.probability = m.probability;
+                        out.contacts.extend(m.contact.filter(|_| m.collides));
+                    }
+                    None => {
+                        let overlap = root_boxes_overlap(ma, &ea.pose, mb, &eb.pose);
+                        out.probability = if overlap { 0.5 } else { 0.0 };
+                    }
+                }
             }
             Method::Adb => {
                 let (ta, tb) = (
                     ea.geometry.adb().expect("ADB pairs are rigid"),
                     eb.geometry.adb().expect("ADB pairs are rigid"),
                 );
-                let late = self.deadline.is_some_and(|d| Instant::now() > d);
                 query.p_min = job.p_min;
-                query.budget = match (job.slice, late) {
-                    (u64::MAX, _) => Budget::Unlimited,
-                    (_, true) => Budget::NodePairs(self.config.min_slice),
-                    (s, false) => Budget::NodePairs(s),
+                query.budget = match job.slice {
+                    u64::MAX => Budget::Unlimited,
+                    s => Budget::NodePairs(s),
                 };
                 let r = adb_intersects(ta, &ea.pose, tb, &eb.pose, query, adb);
                 out.node_pairs = r.node_pairs_visited;
@@ -347,7 +451,7 @@ impl Context<'_> {
                             None => ContactPoint {
                                 point: w.point,
                                 normal: w.normal,
-                                depth: box_depth(&ea.aabb, &eb.aabb, w.normal),
+                                depth: node_depth(ma, &ea.pose, mb, &eb.pose, w.nodes, w.normal),
                                 triangles: None,
                             },
                         },
@@ -355,7 +459,9 @@ impl Context<'_> {
                     });
                 }
             }
-            Method::Tracking | Method::SelfCollision => unreachable!("not a narrow-phase job"),
+            Method::Tracking | Method::SelfCollision | Method::Coherence | Method::Cached => {
+                unreachable!("not a narrow-phase job")
+            }
         }
         out
     }

@@ -25,9 +25,10 @@ pub enum FrameBudget {
     /// No limit: ADB pairs run until their `p_min`/`k_min` rule settles them.
     Unlimited,
     /// A wall-clock budget. The narrow phase converts what is left of it after Prepare and
-    /// BroadPhase into node pairs at the rate measured in earlier runs, shares them among the
-    /// ADB pairs by priority, and gives pairs still waiting at the deadline only their minimum
-    /// slice. Results then depend on timing: use `NodePairs` for reproducible runs.
+    /// BroadPhase into node pairs at the rate measured in earlier runs and shares them among
+    /// the ADB pairs by priority; ADB pairs whose turn comes after the deadline keep their
+    /// previous answer ([`Method::Coherence`](super::Method::Coherence)). Results then depend
+    /// on timing: use `NodePairs` for reproducible runs.
     Time(Duration),
     /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by
     /// priority. Deterministic (same results for any thread count and machine).
@@ -43,6 +44,10 @@ pub struct CollisionConfig {
     pub default_fidelity: Fidelity,
     /// `k_min` of the ADB queries (pieces of evidence needed).
     pub k_min: u32,
+    /// ADB traversals test the triangles of the leaf pairs they reach exactly: a hit is a
+    /// certain collision whose contact comes from the triangle pair (a good normal and depth);
+    /// without, contacts come from the most probable node pair.
+    pub adb_exact_leaves: bool,
     /// Node pairs every ADB pair gets whatever the budget (the root pair is always expanded).
     pub min_slice: u64,
     /// Node pairs an ADB pair gets at most, however generous the budget.
@@ -52,7 +57,8 @@ pub struct CollisionConfig {
     pub seed: u64,
     /// Distance by which world boxes are inflated before the broad phase.
     pub aabb_margin: f32,
-    /// Contacts reported per pair of distinct entities at most.
+    /// Contacts reported per pair with a deformable mesh at most (rigid pairs report the
+    /// first contact found).
     pub max_contacts_per_pair: usize,
     /// Contacts reported per self-colliding mesh at most.
     pub max_self_contacts: usize,
@@ -67,11 +73,12 @@ impl Default for CollisionConfig {
             budget: FrameBudget::Time(Duration::from_micros(2000)),
             default_fidelity: Fidelity::Adb { p_min: 0.99 },
             k_min: 10,
-            min_slice: 8,
+            adb_exact_leaves: true,
+            min_slice: 4,
             max_slice: 4096,
             seed: 0x5eed,
             aabb_margin: 0.0,
-            max_contacts_per_pair: 4,
+            max_contacts_per_pair: 64,
             max_self_contacts: 256,
             response_budget: None,
         }

@@ -52,7 +52,30 @@ use super::schedule::CollisionSystems;
 
 /// Linear velocity of a simple rigid body (units per second).
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[require(Rest)]
 pub struct Velocity(pub Vec3);
+
+/// Sleep state of a body with [`Velocity`]: a body slower than
+/// [`ImpulseSettings::sleep_speed`] for [`ImpulseSettings::sleep_frames`] runs falls asleep:
+/// it stops moving (so its pairs are [cached](super::Method::Cached)) until an awake body
+/// hits it faster than [`ImpulseSettings::wake_speed`].
+#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Rest {
+    still_frames: u32,
+    asleep: bool,
+}
+
+impl Rest {
+    /// Whether the body sleeps.
+    pub fn is_asleep(&self) -> bool {
+        self.asleep
+    }
+
+    /// Wakes the body up.
+    pub fn wake(&mut self) {
+        *self = Rest::default();
+    }
+}
 
 /// Mass of a body with [`Velocity`] (default 1).
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
@@ -79,6 +102,14 @@ pub struct ImpulseSettings {
     pub slop: f32,
     /// Velocity damping per second (air drag, rolling friction).
     pub damping: f32,
+    /// Coulomb friction coefficient at contacts.
+    pub friction: f32,
+    /// Speed below which a body counts as still.
+    pub sleep_speed: f32,
+    /// Runs a body must stay still to fall asleep (0: never sleeps).
+    pub sleep_frames: u32,
+    /// Approach speed at which an awake body wakes a sleeping one.
+    pub wake_speed: f32,
 }
 
 impl Default for ImpulseSettings {
@@ -90,6 +121,10 @@ impl Default for ImpulseSettings {
             correction: 0.4,
             slop: 0.005,
             damping: 0.1,
+            friction: 0.5,
+            sleep_speed: 0.2,
+            sleep_frames: 30,
+            wake_speed: 0.5,
         }
     }
 }
@@ -121,23 +156,49 @@ impl Plugin for ImpulseResponsePlugin {
                 self.schedule,
                 (
                     integrate_velocities.before(CollisionSystems::Prepare),
-                    impulse_response.in_set(CollisionSystems::Response),
+                    (impulse_response, sleep_bodies)
+                        .chain()
+                        .in_set(CollisionSystems::Response),
                 ),
             );
         app.world_mut().resource_mut::<ContactQueue>().enable();
     }
 }
 
-/// Moves bodies with [`Velocity`] by one step under gravity.
+/// Moves the awake bodies with [`Velocity`] by one step under gravity.
 pub fn integrate_velocities(
     settings: Res<ImpulseSettings>,
-    mut q: Query<(&mut Velocity, &mut ColliderPose)>,
+    mut q: Query<(&mut Velocity, &mut ColliderPose, &Rest)>,
 ) {
     let dt = settings.dt;
     let keep = (1.0 - settings.damping * dt).clamp(0.0, 1.0);
-    for (mut v, mut pose) in &mut q {
+    for (mut v, mut pose, rest) in &mut q {
+        if rest.asleep {
+            continue;
+        }
         v.0 = (v.0 + settings.gravity * dt) * keep;
         pose.0.translation += v.0 * dt;
+    }
+}
+
+/// Counts still runs and puts bodies to sleep (after the impulses).
+pub fn sleep_bodies(settings: Res<ImpulseSettings>, mut q: Query<(&mut Velocity, &mut Rest)>) {
+    if settings.sleep_frames == 0 {
+        return;
+    }
+    for (mut v, mut rest) in &mut q {
+        if rest.asleep {
+            continue;
+        }
+        if v.0.length() < settings.sleep_speed {
+            rest.still_frames += 1;
+            if rest.still_frames >= settings.sleep_frames {
+                rest.asleep = true;
+                v.0 = Vec3::ZERO;
+            }
+        } else {
+            rest.still_frames = 0;
+        }
     }
 }
 
@@ -145,7 +206,7 @@ pub fn integrate_velocities(
 pub fn impulse_response(
     settings: Res<ImpulseSettings>,
     mut queue: ResMut<ContactQueue>,
-    mut bodies: Query<(&mut ColliderPose, Option<&mut Velocity>, Option<&Mass>)>,
+    mut bodies: Query<BodyData>,
     deformables: Query<(), With<Deformable>>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
@@ -162,13 +223,26 @@ pub fn impulse_response(
     diag.record(Stage::Response, start.elapsed(), n as u64);
 }
 
+/// What the impulse response reads and writes of a body.
+type BodyData = (
+    &'static mut ColliderPose,
+    Option<&'static mut Velocity>,
+    Option<&'static Mass>,
+    Option<&'static mut Rest>,
+);
+
 type Body<'a> = (
     Mut<'a, ColliderPose>,
     Option<Mut<'a, Velocity>>,
     Option<&'a Mass>,
+    Option<Mut<'a, Rest>>,
 );
 
-fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>) -> f32 {
+/// Inverse mass; 0 for static and sleeping bodies.
+fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>, rest: &Option<Mut<Rest>>) -> f32 {
+    if rest.as_ref().is_some_and(|r| r.asleep) {
+        return 0.0;
+    }
     match (v, m) {
         (None, _) => 0.0,
         (Some(_), Some(m)) if m.0 > 0.0 => 1.0 / m.0,
@@ -176,24 +250,43 @@ fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>) -> f32 {
     }
 }
 
-fn resolve(s: &ImpulseSettings, c: &Contact, a: Body, b: Body) {
-    let (mut pa, mut va, ma) = a;
-    let (mut pb, mut vb, mb) = b;
-    let (ia, ib) = (inverse_mass(&va, ma), inverse_mass(&vb, mb));
+/// Wakes a sleeping body that an awake one approaches faster than the wake speed.
+fn wake_if_hit<'w>(s: &ImpulseSettings, c: &Contact, a: &mut Body<'w>, b: &mut Body<'w>) {
+    let vel = |v: &Option<Mut<Velocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
+    let approach = -(vel(&b.1) - vel(&a.1)).dot(c.normal);
+    if approach > s.wake_speed {
+        for r in [a.3.as_mut(), b.3.as_mut()].into_iter().flatten() {
+            if r.asleep {
+                r.wake();
+            }
+        }
+    }
+}
+
+fn resolve<'w>(s: &ImpulseSettings, c: &Contact, mut a: Body<'w>, mut b: Body<'w>) {
+    wake_if_hit(s, c, &mut a, &mut b);
+    let (mut pa, mut va, ma, ra) = a;
+    let (mut pb, mut vb, mb, rb) = b;
+    let (ia, ib) = (inverse_mass(&va, ma, &ra), inverse_mass(&vb, mb, &rb));
     let inv = ia + ib;
     if inv == 0.0 || !c.normal.is_finite() || c.normal == Vec3::ZERO {
         return;
     }
     let n = c.normal;
     let vel = |v: &Option<Mut<Velocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
-    let vn = (vel(&vb) - vel(&va)).dot(n);
+    let rel = vel(&vb) - vel(&va);
+    let vn = rel.dot(n);
     if vn < 0.0 {
         let j = -(1.0 + s.restitution) * vn / inv;
+        // Friction: remove tangential relative velocity, at most `friction × j`.
+        let vt = rel - n * vn;
+        let jt = (vt.length() / inv).min(s.friction * j);
+        let impulse = n * j - vt.normalize_or_zero() * jt;
         if let Some(v) = &mut va {
-            v.0 -= n * j * ia;
+            v.0 -= impulse * ia;
         }
         if let Some(v) = &mut vb {
-            v.0 += n * j * ib;
+            v.0 += impulse * ib;
         }
     }
     let push = (c.depth - s.slop).max(0.0) * s.correction / inv;

@@ -64,3 +64,13 @@ pub fn at(x: f32, y: f32, z: f32) -> ColliderPose {
 pub fn log(app: &App) -> &EventLog {
     app.world().resource::<EventLog>()
 }
+
+/// Spawns `bundle`, returns the entity.
+pub fn spawn(app: &mut App, bundle: impl Bundle) -> Entity {
+    app.world_mut().spawn(bundle).id()
+}
+
+/// A pair as the messages give it (smaller entity first).
+pub fn pair(a: Entity, b: Entity) -> (Entity, Entity) {
+    (a.min(b), a.max(b))
+}

@@ -1,0 +1,363 @@
+//! Profiles a headless example world: per-stage timings against the frame budget, events,
+//! and how often the budgeted answers agree with the exact query.
+//!
+//! ```text
+//! cargo run --release --example profile -- --scene pile|cannonball|cloth|intestine \
+//!     [--frames N] [--entities N] [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
+//!     [--json out.json] [--svg out.svg]
+//! ```
+//!
+//! `--budget-us 0` means no budget; `--node-budget N` replaces the time budget with a work
+//! budget of N ADB node pairs per frame (deterministic: the same run for any thread count,
+//! which is how to compare thread counts fairly).
+//!
+//! JSON fields: `scene`, `frames`, `threads`, `budget_us`, `stages` (by name: `mean_us`,
+//! `p50_us`, `p99_us` over the frames the stage ran, `runs`), `collision_p99_us` (Prepare to
+//! Report), `overrun_frames` (collision time above the budget), `events` (`started`, `ended`,
+//! `contacts`), `events_deferred` (contacts left for a later frame by the response budget),
+//! `events_lost` (written but never read by a reader that runs every other frame), and
+//! `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms).
+mod support;
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use plotters::prelude::*;
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use stochastic_collision::bvh::{QueryWorkspace, intersects};
+use stochastic_collision::ecs::{ColliderFrame, ContactQueue, PairOutcomes, Stage};
+use stochastic_collision::prelude::*;
+use support::{Options, Scene, tally};
+
+struct Args {
+    scene: Scene,
+    frames: usize,
+    options: Options,
+    json: Option<String>,
+    svg: Option<String>,
+}
+
+fn parse() -> Result<Args, String> {
+    let mut args = Args {
+        scene: Scene::Pile,
+        frames: 0,
+        options: Options::default(),
+        json: None,
+        svg: None,
+    };
+    let mut it = std::env::args().skip(1);
+    while let Some(flag) = it.next() {
+        let mut value = || it.next().ok_or(format!("{flag} needs a value"));
+        let num = |v: String| v.parse::<u64>().map_err(|e| format!("{flag}: {e}"));
+        match flag.as_str() {
+            "--scene" => {
+                let v = value()?;
+                args.scene = Scene::parse(&v).ok_or(format!("unknown scene {v}"))?;
+            }
+            "--frames" => args.frames = num(value()?)? as usize,
+            "--entities" => args.options.entities = num(value()?)? as usize,
+            "--threads" => args.options.threads = num(value()?)?.max(1) as usize,
+            "--budget-us" => args.options.budget_us = num(value()?)?,
+            "--node-budget" => args.options.node_budget = Some(num(value()?)?),
+            "--seed" => args.options.seed = num(value()?)?,
+            "--json" => args.json = Some(value()?),
+            "--svg" => args.svg = Some(value()?),
+            "-h" | "--help" => return Err(String::new()),
+            other => return Err(format!("unknown argument {other}")),
+        }
+    }
+    if args.frames == 0 {
+        args.frames = args.scene.default_frames();
+    }
+    Ok(args)
+}
+
+/// One frame's stage times (µs; `None`: not run) and the collision time.
+struct FrameRecord {
+    stages: Vec<Option<f64>>,
+    collision_us: f64,
+}
+
+fn main() {
+    let args = match parse() {
+        Ok(a) => a,
+        Err(e) => {
+            eprintln!(
+                "{e}\nusage: profile --scene pile|cannonball|cloth|intestine [--frames N] [--entities N] \
+                 [--threads T] [--budget-us B] [--node-budget N] [--seed S] [--json out.json] [--svg out.svg]"
+            );
+            std::process::exit(2);
+        }
+    };
+    let build = Instant::now();
+    let mut app = args.scene.build(&args.options);
+    app.finish();
+    app.cleanup();
+    let build_time = build.elapsed();
+    let mut records = Vec::with_capacity(args.frames);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(args.options.seed ^ 0xa9);
+    let mut ws = QueryWorkspace::new();
+    let (mut sampled, mut agreed) = (0u64, 0u64);
+    let run = Instant::now();
+    for frame in 0..args.frames {
+        if frame + 1 == args.frames {
+            app.world_mut().resource_mut::<tally::Tally>().last = true;
+        }
+        app.update();
+        let world = app.world();
+        let d = world.resource::<CollisionDiagnostics>();
+        records.push(FrameRecord {
+            stages: Stage::ALL
+                .iter()
+                .map(|&s| d.stage(s).last.map(|t| t.as_secs_f64() * 1e6))
+                .collect(),
+            collision_us: d.collision_time.as_secs_f64() * 1e6,
+        });
+        // Agreement: a few pairs per frame, re-tested exactly (outside the timed stages).
+        let entries = world.resource::<ColliderFrame>();
+        let outcomes = world.resource::<PairOutcomes>().outcomes();
+        let distinct: Vec<_> = outcomes.iter().filter(|o| o.a != o.b).collect();
+        for _ in 0..distinct.len().min(8) {
+            let o = distinct[rng.random_range(0..distinct.len())];
+            if let (Some(a), Some(b)) = (entries.get(o.a), entries.get(o.b)) {
+                let exact = intersects(
+                    a.geometry.mesh(),
+                    &a.pose,
+                    b.geometry.mesh(),
+                    &b.pose,
+                    &mut ws,
+                );
+                sampled += 1;
+                agreed += u64::from(exact == o.collides);
+            }
+        }
+    }
+    let wall = run.elapsed();
+    report(
+        &args,
+        &mut app,
+        &records,
+        (sampled, agreed),
+        build_time,
+        wall,
+    );
+}
+
+fn percentile(sorted: &[f64], q: f64) -> f64 {
+    if sorted.is_empty() {
+        return 0.0;
+    }
+    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
+    sorted[i]
+}
+
+fn summary(values: &[f64]) -> (f64, f64, f64) {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    let mean = if v.is_empty() {
+        0.0
+    } else {
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    (mean, percentile(&v, 0.5), percentile(&v, 0.99))
+}
+
+fn report(
+    args: &Args,
+    app: &mut bevy_app::App,
+    records: &[FrameRecord],
+    (sampled, agreed): (u64, u64),
+    build_time: std::time::Duration,
+    wall: std::time::Duration,
+) {
+    let world = app.world_mut();
+    let lost = tally::lost(world);
+    let d = world.resource::<CollisionDiagnostics>().clone();
+    let deferred = world.resource::<ContactQueue>().deferred_total;
+    let budget = args.options.budget_us as f64;
+    let collision: Vec<f64> = records.iter().map(|r| r.collision_us).collect();
+    let (c_mean, c_p50, c_p99) = summary(&collision);
+    let overruns = if budget > 0.0 {
+        collision.iter().filter(|&&c| c > budget).count()
+    } else {
+        0
+    };
+    let agreement = if sampled == 0 {
+        1.0
+    } else {
+        agreed as f64 / sampled as f64
+    };
+    let mut stages = String::new();
+    println!(
+        "scene {} ({} entities), {} frames, {} threads, budget {} us{}; setup {:.2} s, run {:.2} s",
+        args.scene.name(),
+        world.resource::<ColliderFrame>().entries().len(),
+        records.len(),
+        args.options.threads,
+        args.options.budget_us,
+        args.options
+            .node_budget
+            .map_or(String::new(), |n| format!(" (work budget {n} node pairs)")),
+        build_time.as_secs_f64(),
+        wall.as_secs_f64()
+    );
+    println!(
+        "{:<16}{:>10}{:>10}{:>10}{:>8}",
+        "stage", "mean_us", "p50_us", "p99_us", "runs"
+    );
+    for (k, s) in Stage::ALL.iter().enumerate() {
+        let ran: Vec<f64> = records.iter().filter_map(|r| r.stages[k]).collect();
+        let (mean, p50, p99) = summary(&ran);
+        if ran.is_empty() {
+            println!("{:<16}{:>38}", s.name(), "not run");
+        } else {
+            println!(
+                "{:<16}{mean:>10.1}{p50:>10.1}{p99:>10.1}{:>8}",
+                s.name(),
+                ran.len()
+            );
+        }
+        let _ = write!(
+            stages,
+            "{}\n    \"{}\": {{\"mean_us\": {mean:.2}, \"p50_us\": {p50:.2}, \"p99_us\": {p99:.2}, \"runs\": {}}}",
+            if k == 0 { "" } else { "," },
+            s.name(),
+            ran.len()
+        );
+    }
+    let c = d.counters;
+    println!(
+        "collision (prepare..report): mean {c_mean:.1} us, p50 {c_p50:.1} us, p99 {c_p99:.1} us; {overruns} frames over budget"
+    );
+    println!(
+        "events: {} started, {} ended, {} contacts; {deferred} contacts deferred, {lost} events lost",
+        c.started, c.ended, c.contacts
+    );
+    println!(
+        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} past the deadline), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs",
+        c.node_pairs,
+        c.adb_pairs,
+        c.budget_exhausted_pairs,
+        c.coherence_pairs,
+        c.exact_pairs,
+        c.cached_pairs,
+        agreement
+    );
+    if let Some(path) = &args.json {
+        let json = format!(
+            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}}}\n}}\n",
+            args.scene.name(),
+            records.len(),
+            args.options.threads,
+            args.options.budget_us,
+            args.options
+                .node_budget
+                .map_or("null".to_string(), |n| n.to_string()),
+            world.resource::<ColliderFrame>().entries().len(),
+            args.options.seed,
+            c.started,
+            c.ended,
+            c.contacts,
+            c.node_pairs,
+            c.adb_pairs,
+            c.budget_exhausted_pairs,
+            c.coherence_pairs,
+            c.exact_pairs,
+            c.cached_pairs,
+        );
+        match std::fs::write(path, json) {
+            Ok(()) => println!("wrote {path}"),
+            Err(e) => eprintln!("cannot write {path}: {e}"),
+        }
+    }
+    if let Some(path) = &args.svg {
+        match timeline(path, args, records) {
+            Ok(()) => println!("wrote {path}"),
+            Err(e) => eprintln!("cannot write {path}: {e}"),
+        }
+    }
+}
+
+/// Per-frame stage times (and the collision total) against the budget.
+fn timeline(
+    path: &str,
+    args: &Args,
+    records: &[FrameRecord],
+) -> Result<(), Box<dyn std::error::Error>> {
+    let budget = args.options.budget_us as f64;
+    let top = records
+        .iter()
+        .map(|r| r.collision_us)
+        .fold(budget, f64::max)
+        * 1.1;
+    let root = SVGBackend::new(path, (1000, 520)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            format!(
+                "{}: stage times per frame, {} threads, budget {} us",
+                args.scene.name(),
+                args.options.threads,
+                args.options.budget_us
+            ),
+            ("sans-serif", 18),
+        )
+        .margin(10)
+        .x_label_area_size(35)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0f64..records.len() as f64, 0f64..top.max(1.0))?;
+    chart.configure_mesh().x_desc("frame").y_desc("µs").draw()?;
+    let colors = [
+        BLUE,
+        GREEN,
+        CYAN,
+        MAGENTA,
+        RGBColor(200, 120, 0),
+        RGBColor(120, 60, 160),
+        BLACK,
+        RGBColor(120, 120, 120),
+    ];
+    for (k, s) in Stage::ALL.iter().enumerate() {
+        if records.iter().all(|r| r.stages[k].is_none()) {
+            continue;
+        }
+        let color = colors[k % colors.len()];
+        chart
+            .draw_series(LineSeries::new(
+                records
+                    .iter()
+                    .enumerate()
+                    .map(|(f, r)| (f as f64, r.stages[k].unwrap_or(0.0))),
+                color,
+            ))?
+            .label(s.name())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], color));
+    }
+    chart
+        .draw_series(LineSeries::new(
+            records
+                .iter()
+                .enumerate()
+                .map(|(f, r)| (f as f64, r.collision_us)),
+            BLACK.stroke_width(2),
+        ))?
+        .label("collision (prepare..report)")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], BLACK.stroke_width(2)));
+    if budget > 0.0 {
+        chart
+            .draw_series(LineSeries::new(
+                [(0.0, budget), (records.len() as f64, budget)],
+                RED.stroke_width(2),
+            ))?
+            .label("budget")
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.stroke_width(2)));
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}

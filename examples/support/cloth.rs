@@ -1,0 +1,96 @@
+//! Cloth: sheets (deformable grids with self-collision) falling onto a ball and the floor,
+//! folding onto themselves; a small position-based cloth solver moves the vertices, the
+//! built-in penalty response pushes contacts apart.
+use bevy_app::prelude::*;
+use bevy_ecs::prelude::*;
+use stochastic_collision::prelude::*;
+
+use super::Options;
+
+/// Default number of sheets.
+pub const DEFAULT_SHEETS: usize = 2;
+
+const DT: f32 = 1.0 / 60.0;
+
+/// Verlet state of a sheet: previous positions and the grid's edges with rest lengths.
+#[derive(Component, Debug, Clone)]
+pub struct ClothState {
+    prev: Vec<Vec3>,
+    edges: Vec<(u32, u32, f32)>,
+}
+
+impl ClothState {
+    fn new(mesh: &TriMesh) -> Self {
+        let p = mesh.positions();
+        let mut edges: Vec<(u32, u32, f32)> = mesh
+            .triangles()
+            .iter()
+            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+            .map(|(a, b)| (a.min(b), a.max(b), 0.0))
+            .collect();
+        edges.sort_by_key(|e| (e.0, e.1));
+        edges.dedup_by_key(|e| (e.0, e.1));
+        for e in &mut edges {
+            e.2 = p[e.0 as usize].distance(p[e.1 as usize]);
+        }
+        Self {
+            prev: p.to_vec(),
+            edges,
+        }
+    }
+}
+
+pub fn setup(app: &mut App, options: &Options) {
+    app.add_plugins(PenaltyResponsePlugin::in_schedule(PostUpdate))
+        .add_systems(PostUpdate, step_cloth.before(CollisionSystems::Prepare));
+    let world = app.world_mut();
+    world.spawn((
+        Collider::new(generate::icosphere(0.5, 3)),
+        ColliderPose::from_translation(Vec3::ZERO),
+        Fidelity::Exact,
+    ));
+    world.spawn((
+        Collider::new(generate::cuboid(Vec3::new(3.0, 0.25, 3.0), 4)),
+        ColliderPose::from_translation(Vec3::new(0.0, -0.85, 0.0)),
+        Fidelity::Exact,
+    ));
+    for k in 0..options.count(DEFAULT_SHEETS) {
+        let mesh = generate::cloth_grid(2.0, 2.0, 24, 24);
+        let state = ClothState::new(&mesh);
+        let turn = Quat::from_rotation_y(0.4 * k as f32);
+        world.spawn((
+            Deformable::new(mesh),
+            state,
+            SelfCollision,
+            ColliderPose(Pose::new(
+                Vec3::new(0.1 * k as f32, 0.8 + 0.3 * k as f32, 0.0),
+                turn,
+            )),
+        ));
+    }
+}
+
+/// Verlet integration under gravity, then the edge lengths restored (a few iterations).
+fn step_cloth(mut q: Query<(&mut Deformable, &mut ClothState, &ColliderPose)>) {
+    for (mut cloth, mut state, pose) in &mut q {
+        let gravity = pose.0.rotation.inverse() * Vec3::new(0.0, -9.81, 0.0);
+        let state = &mut *state;
+        let p = cloth.positions_mut();
+        for (x, prev) in p.iter_mut().zip(&mut state.prev) {
+            let v = (*x - *prev) * 0.99;
+            *prev = *x;
+            *x += v + gravity * DT * DT;
+        }
+        for _ in 0..4 {
+            for &(a, b, rest) in &state.edges {
+                let d = p[b as usize] - p[a as usize];
+                let len = d.length();
+                if len > 1e-6 {
+                    let fix = d * (0.5 * (len - rest) / len);
+                    p[a as usize] += fix;
+                    p[b as usize] -= fix;
+                }
+            }
+        }
+    }
+}

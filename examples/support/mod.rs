@@ -1,0 +1,210 @@
+//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`) and
+//! `profile`: each scene builds a headless `App` with the plugin in `PostUpdate`.
+#![allow(dead_code)]
+
+pub mod cannonball;
+pub mod cloth;
+pub mod intestine;
+pub mod pile;
+
+use std::path::PathBuf;
+use std::time::Duration;
+
+use bevy_app::prelude::*;
+use stochastic_collision::prelude::*;
+
+/// Settings every scene takes (the `profile` command line).
+#[derive(Debug, Clone)]
+pub struct Options {
+    /// Scene-specific count (bodies, shots, cloths, intestines); 0 = the scene's default.
+    pub entities: usize,
+    /// Threads testing pairs.
+    pub threads: usize,
+    /// Time budget of the collision stages per run, µs (0 = unlimited).
+    pub budget_us: u64,
+    /// Work budget in ADB node pairs per run (overrides the time budget: deterministic).
+    pub node_budget: Option<u64>,
+    /// Seed of the scene and of the plugin.
+    pub seed: u64,
+    /// Fidelity of rigid colliders without their own (default: ADB with `p_min = 0.99`).
+    pub fidelity: Option<Fidelity>,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            entities: 0,
+            threads: 2,
+            budget_us: 2000,
+            node_budget: None,
+            seed: 1,
+            fidelity: None,
+        }
+    }
+}
+
+impl Options {
+    /// The plugin's configuration for these options.
+    pub fn config(&self) -> CollisionConfig {
+        let budget = match (self.node_budget, self.budget_us) {
+            (Some(n), _) => FrameBudget::NodePairs(n),
+            (None, 0) => FrameBudget::Unlimited,
+            (None, us) => FrameBudget::Time(Duration::from_micros(us)),
+        };
+        let defaults = CollisionConfig::default();
+        CollisionConfig {
+            budget,
+            seed: self.seed,
+            default_fidelity: self.fidelity.unwrap_or(defaults.default_fidelity),
+            ..defaults
+        }
+    }
+
+    /// The plugin in `PostUpdate` (no time plugin needed) with these options.
+    pub fn plugin(&self) -> StochasticCollisionPlugin {
+        StochasticCollisionPlugin::in_schedule(PostUpdate)
+            .with_config(self.config())
+            .with_threads(self.threads)
+    }
+
+    /// `entities`, or `default` when 0.
+    pub fn count(&self, default: usize) -> usize {
+        if self.entities == 0 {
+            default
+        } else {
+            self.entities
+        }
+    }
+}
+
+/// The scenes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scene {
+    /// Rigid bodies falling into a box.
+    Pile,
+    /// Cannonballs against a wall.
+    Cannonball,
+    /// Cloth draped over a ball.
+    Cloth,
+    /// A deforming intestine.
+    Intestine,
+}
+
+impl Scene {
+    /// From its name.
+    pub fn parse(name: &str) -> Option<Scene> {
+        Some(match name {
+            "pile" => Scene::Pile,
+            "cannonball" => Scene::Cannonball,
+            "cloth" => Scene::Cloth,
+            "intestine" => Scene::Intestine,
+            _ => return None,
+        })
+    }
+
+    /// Its name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Scene::Pile => "pile",
+            Scene::Cannonball => "cannonball",
+            Scene::Cloth => "cloth",
+            Scene::Intestine => "intestine",
+        }
+    }
+
+    /// Frames a quick run takes.
+    pub fn default_frames(self) -> usize {
+        match self {
+            Scene::Pile => 300,
+            Scene::Cannonball => 150,
+            Scene::Cloth => 200,
+            Scene::Intestine => 60,
+        }
+    }
+
+    /// Builds the scene's app.
+    pub fn build(self, options: &Options) -> App {
+        let mut app = App::new();
+        app.add_plugins(options.plugin());
+        tally::add(&mut app);
+        match self {
+            Scene::Pile => pile::setup(&mut app, options),
+            Scene::Cannonball => cannonball::setup(&mut app, options, None),
+            Scene::Cloth => cloth::setup(&mut app, options),
+            Scene::Intestine => intestine::setup(&mut app, options),
+        }
+        app
+    }
+}
+
+/// A shared mesh (`../shared/assets/meshes/<file>` beside the crate), if present.
+pub fn shared_mesh(file: &str) -> Option<TriMesh> {
+    let dir = std::env::var_os("STOCHASTIC_COLLISION_MESHES").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes"),
+        PathBuf::from,
+    );
+    TriMesh::from_obj(dir.join(file)).ok()
+}
+
+/// `mesh` moved to its box centre and scaled so that its largest extent is `size`.
+pub fn normalized(mesh: &TriMesh, size: f32) -> TriMesh {
+    let b = mesh.aabb();
+    let s = size / b.extents().max_element().max(1e-6);
+    let positions = mesh
+        .positions()
+        .iter()
+        .map(|p| (*p - b.center()) * s)
+        .collect();
+    TriMesh::new(positions, mesh.triangles().to_vec()).expect("scaling keeps a valid mesh")
+}
+
+pub mod tally {
+    //! Counting the events a game would read: a reader that runs only every other frame (and
+    //! once more at the end), to check that none is lost.
+    use bevy_app::prelude::*;
+    use bevy_ecs::prelude::*;
+    use stochastic_collision::prelude::*;
+
+    /// Events read by [`read_events`].
+    #[derive(Resource, Debug, Default, Clone, Copy)]
+    pub struct Tally {
+        pub started: u64,
+        pub ended: u64,
+        pub contacts: u64,
+        pub errors: u64,
+        pub updates: u64,
+        /// Set before the last update: the reader runs then whatever the frame.
+        pub last: bool,
+    }
+
+    pub fn add(app: &mut App) {
+        app.init_resource::<Tally>().add_systems(
+            Last,
+            (
+                read_events.run_if(|t: Res<Tally>| t.updates % 2 == 1 || t.last),
+                |mut t: ResMut<Tally>| t.updates += 1,
+            )
+                .chain(),
+        );
+    }
+
+    fn read_events(
+        mut t: ResMut<Tally>,
+        mut started: MessageReader<CollisionStarted>,
+        mut ended: MessageReader<CollisionEnded>,
+        mut contacts: MessageReader<Contact>,
+        mut errors: MessageReader<CollisionError>,
+    ) {
+        t.started += started.read().count() as u64;
+        t.ended += ended.read().count() as u64;
+        t.contacts += contacts.read().count() as u64;
+        t.errors += errors.read().count() as u64;
+    }
+
+    /// Events written but not read.
+    pub fn lost(world: &World) -> u64 {
+        let c = world.resource::<CollisionDiagnostics>().counters;
+        let t = world.resource::<Tally>();
+        (c.started + c.ended + c.contacts).saturating_sub(t.started + t.ended + t.contacts)
+    }
+}
