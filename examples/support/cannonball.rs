@@ -47,6 +47,12 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
     }
     let ball = Collider::new(generate::icosphere(0.15, 2));
     let fidelity = fidelity.unwrap_or(Fidelity::Adb { p_min: 0.5 });
+    if let Fidelity::Adb { .. } = fidelity {
+        // A quick plausibility answer: few pieces of evidence, no exact triangle tests.
+        let mut config = world.resource_mut::<CollisionConfig>();
+        config.k_min = 2;
+        config.adb_exact_leaves = false;
+    }
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(options.seed);
     for _ in 0..options.count(DEFAULT_SHOTS) {
         let start = Vec3::new(

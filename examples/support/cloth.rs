@@ -55,7 +55,7 @@ pub fn setup(app: &mut App, options: &Options) {
         Fidelity::Exact,
     ));
     for k in 0..options.count(DEFAULT_SHEETS) {
-        let mesh = generate::cloth_grid(2.0, 2.0, 24, 24);
+        let mesh = generate::cloth_grid(2.0, 2.0, 20, 20);
         let state = ClothState::new(&mesh);
         let turn = Quat::from_rotation_y(0.4 * k as f32);
         world.spawn((

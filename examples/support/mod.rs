@@ -117,8 +117,8 @@ impl Scene {
         match self {
             Scene::Pile => 300,
             Scene::Cannonball => 150,
-            Scene::Cloth => 200,
-            Scene::Intestine => 60,
+            Scene::Cloth => 120,
+            Scene::Intestine => 30,
         }
     }
 

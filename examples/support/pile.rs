@@ -31,6 +31,8 @@ pub fn setup(app: &mut App, options: &Options) {
     // A box whose floor holds about a quarter of the bodies per layer.
     let per_row = ((n as f32 / 4.0).sqrt().ceil() as usize).max(2);
     let spacing = 0.6;
+    // Layers fall from a little apart, so that they land one after the other.
+    let layer_gap = 1.2;
     let half = per_row as f32 * spacing * 0.5 + 0.3;
     let world = app.world_mut();
     // Subdivided, so that its tree has small leaves (a few huge triangles make every exact
@@ -61,7 +63,7 @@ pub fn setup(app: &mut App, options: &Options) {
         );
         let position = Vec3::new(
             (col as f32 + 0.5) * spacing - half + 0.3,
-            0.6 + layer as f32 * spacing,
+            0.6 + layer as f32 * layer_gap,
             (row as f32 + 0.5) * spacing - half + 0.3,
         ) + jitter;
         let axis = Vec3::new(

@@ -2,6 +2,7 @@
 use glam::Vec3;
 
 use super::prepare::world_aabb;
+use crate::adb::ContactWitness;
 use crate::bvh::{CollisionMesh, TrianglePair};
 use crate::geometry::{Aabb, Pose};
 
@@ -65,18 +66,28 @@ pub(crate) fn triangle_pair_contact(
     }
 }
 
-/// Depth estimate for an ADB witness (which carries no depth): the overlap along `normal` of
-/// the witness's two tree nodes in world space, at most half the thinner node's extent along it.
-pub(crate) fn node_depth(
+/// The contact of an ADB witness (a probable node pair, no triangle pair): its point; its
+/// normal, turned to agree with the direction between the two nodes' centres (a node's mean
+/// surface normal can point anywhere when the node is large); as depth, the nodes' overlap
+/// along the normal, at most half the thinner node's extent along it, scaled by the
+/// confidence (an uncertain contact pushes gently).
+pub(crate) fn node_contact(
     a: &CollisionMesh,
     pose_a: &Pose,
     b: &CollisionMesh,
     pose_b: &Pose,
-    (na, nb): (u32, u32),
-    normal: Vec3,
-) -> f32 {
+    w: &ContactWitness,
+    probability: f64,
+) -> ContactPoint {
+    let (na, nb) = w.nodes;
     let box_a = world_aabb(&a.bvh().nodes()[na as usize].aabb(), pose_a);
     let box_b = world_aabb(&b.bvh().nodes()[nb as usize].aabb(), pose_b);
+    let apart = box_b.center() - box_a.center();
+    let normal = if w.normal.dot(apart) >= 0.0 || apart == Vec3::ZERO {
+        w.normal
+    } else {
+        apart.normalize()
+    };
     let project = |bx: &Aabb| {
         let c = bx.center().dot(normal);
         let r = bx.half_extents().dot(normal.abs());
@@ -84,5 +95,11 @@ pub(crate) fn node_depth(
     };
     let ((a0, a1), (b0, b1)) = (project(&box_a), project(&box_b));
     let overlap = (a1.min(b1) - a0.max(b0)).max(0.0);
-    overlap.min(0.5 * (a1 - a0).min(b1 - b0))
+    let depth = overlap.min(0.5 * (a1 - a0).min(b1 - b0)) * probability as f32;
+    ContactPoint {
+        point: w.point,
+        normal,
+        depth,
+        triangles: None,
+    }
 }

@@ -6,7 +6,7 @@
 //! workspaces; results are merged in pair order (by entity), so the outcome is the same for
 //! any number of threads.
 use std::cell::RefCell;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
 use glam::Vec3;
@@ -15,7 +15,7 @@ use smallvec::SmallVec;
 use super::broad_phase::{CandidatePair, CandidatePairs};
 use super::budget::{WorkRate, pair_priority, slices};
 use super::components::Fidelity;
-use super::contact::{ContactPoint, node_depth, triangle_pair_contact};
+use super::contact::{ContactPoint, node_contact, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::plugin::{CollisionConfig, FrameBudget};
 use super::pool::CollisionTaskPool;
@@ -42,10 +42,12 @@ pub enum Method {
     /// Not tested: neither rigid entity moved since the last run (identical poses, e.g.
     /// sleeping bodies) and the last answer was settled, so it is reused as is.
     Cached,
-    /// Not tested: the time budget's deadline passed before the pair's turn. The answer is the
-    /// previous run's (temporal coherence), or for a new pair the oriented root-box test
-    /// (overlapping boxes give "not colliding" with probability 0.5, so the pair comes first
-    /// in the next run).
+    /// Not tested: the time budget's deadline passed before the pair's turn. A pair that
+    /// collided in the previous run keeps that answer and contact (temporal coherence); any
+    /// other pair gets the oriented root-box test, conservatively: overlapping boxes count as
+    /// a contact with probability 0.5 and a box contact (a false contact pushes apart gently,
+    /// a missed one lets bodies sink into each other). Either way the pair waits less in the
+    /// next run.
     Coherence,
 }
 
@@ -107,6 +109,8 @@ pub struct PairOutcomes {
     pub(crate) history: Vec<PairMemory>,
     pub(crate) rate: WorkRate,
     pub(crate) exact_node_pairs: f64,
+    /// Serial time of the last run outside the pair tests (kept free before the deadline).
+    pub(crate) overhead: Duration,
 }
 
 impl PairOutcomes {
@@ -122,6 +126,8 @@ pub(crate) struct PairMemory {
     probability: f64,
     collides: bool,
     settled: bool,
+    /// Runs since the pair was last tested (answered from memory meanwhile).
+    stale: u32,
     poses: (Pose, Pose),
     contact: Option<ContactPoint>,
 }
@@ -199,7 +205,18 @@ pub fn narrow_phase(
         }
         let last = (old_keys.get(cursor) == Some(&key)).then_some(cursor as u32);
         let p_last = last.map(|i| old_memory[i as usize].probability);
-        let priority = pair_priority(p_last, &ea.aabb, &eb.aabb, eb.motion - ea.motion);
+        let stale = last.map_or(0, |i| old_memory[i as usize].stale);
+        let mut priority = pair_priority(p_last, &ea.aabb, &eb.aabb, eb.motion - ea.motion);
+        if method == Method::Exact {
+            // Exact pairs were asked for: tested before the others.
+            priority *= 4.0;
+        }
+        // New pairs first (collisions start there); a pair answered from memory waits less
+        // each run, so none starves under overload.
+        if last.is_none() {
+            priority *= 4.0;
+        }
+        priority *= (1 + stale.min(15)) as f32;
         jobs.push(Job {
             pos: jobs.len() as u32,
             pair,
@@ -241,7 +258,9 @@ pub fn narrow_phase(
         deadline,
     };
     let chunk = pool.chunk_size(order.len(), 8);
+    let run_start = Instant::now();
     let results = pool.map_chunks(&order, chunk, |c| ctx.run_chunk(c));
+    let run_time = run_start.elapsed();
     // Back in pair order (by entity), whatever the processing order and thread count.
     let mut slots: Vec<Option<(PairOutcome, PairMemory)>> = vec![None; jobs.len()];
     for (pos, outcome, memory) in results.into_iter().flatten() {
@@ -269,6 +288,7 @@ pub fn narrow_phase(
         .rate
         .update(np, state.outcomes.len(), elapsed.as_secs_f64() * 1e6);
     state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * exact_np as f64;
+    state.overhead = elapsed.saturating_sub(run_time);
     diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
 }
 
@@ -304,7 +324,7 @@ fn node_budget(
         FrameBudget::NodePairs(n) => (Some(n), None),
         FrameBudget::Time(budget) => {
             let spent = now.saturating_duration_since(diag.frame_start);
-            let reserve = diag.reserve_after_narrow();
+            let reserve = diag.reserve_after_narrow() + state.overhead;
             let left = budget.saturating_sub(spent).saturating_sub(reserve);
             let work = left.as_secs_f64() * 1e6 * state.rate.node_pairs_per_us;
             let adb_work = (work - state.exact_node_pairs).max(0.0);
@@ -347,6 +367,12 @@ impl Context<'_> {
                         settled: !o.budget_exhausted
                             && o.method != Method::Coherence
                             && both_rigid(ea, eb),
+                        stale: match (o.method, job.last) {
+                            (Method::Coherence | Method::Cached, Some(i)) => {
+                                self.memory[i as usize].stale + 1
+                            }
+                            _ => 0,
+                        },
                         poses: (ea.pose, eb.pose),
                         contact: o.contacts.first().copied(),
                     };
@@ -395,6 +421,26 @@ impl Context<'_> {
                 out.probability = 1.0;
                 out.contacts.push(bounds_contact(ea, eb));
             }
+            Method::Adb | Method::Exact if late => {
+                out.method = Method::Coherence;
+                match last {
+                    Some(m) if m.collides => {
+                        out.collides = true;
+                        out.probability = m.probability;
+                        out.contacts.extend(m.contact);
+                    }
+                    // New, or apart last time: err on the side of a contact (a false contact
+                    // pushes apart gently; a missed one lets bodies sink into each other).
+                    _ if root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) => {
+                        out.collides = true;
+                        out.probability = 0.5;
+                        let mut c = bounds_contact(ea, eb);
+                        c.depth *= 0.5;
+                        out.contacts.push(c);
+                    }
+                    _ => {}
+                }
+            }
             Method::Exact if both_rigid(ea, eb) => {
                 // First hit only (stops early): one contact, as for ADB pairs.
                 let hit = intersects_with(ma, &ea.pose, mb, &eb.pose, &Default::default(), exact);
@@ -415,20 +461,6 @@ impl Context<'_> {
                 let (ends, nodes) = ((ea.entity, eb.entity), exact.node_pairs_visited());
                 return PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts);
             }
-            Method::Adb if late => {
-                out.method = Method::Coherence;
-                match last {
-                    Some(m) => {
-                        out.collides = m.collides;
-                        out.probability = m.probability;
-                        out.contacts.extend(m.contact.filter(|_| m.collides));
-                    }
-                    None => {
-                        let overlap = root_boxes_overlap(ma, &ea.pose, mb, &eb.pose);
-                        out.probability = if overlap { 0.5 } else { 0.0 };
-                    }
-                }
-            }
             Method::Adb => {
                 let (ta, tb) = (
                     ea.geometry.adb().expect("ADB pairs are rigid"),
@@ -448,12 +480,7 @@ impl Context<'_> {
                     out.contacts.push(match r.witness {
                         Some(w) => match w.triangles {
                             Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
-                            None => ContactPoint {
-                                point: w.point,
-                                normal: w.normal,
-                                depth: node_depth(ma, &ea.pose, mb, &eb.pose, w.nodes, w.normal),
-                                triangles: None,
-                            },
+                            None => node_contact(ma, &ea.pose, mb, &eb.pose, &w, r.probability),
                         },
                         None => bounds_contact(ea, eb),
                     });

@@ -26,7 +26,7 @@ pub enum FrameBudget {
     Unlimited,
     /// A wall-clock budget. The narrow phase converts what is left of it after Prepare and
     /// BroadPhase into node pairs at the rate measured in earlier runs and shares them among
-    /// the ADB pairs by priority; ADB pairs whose turn comes after the deadline keep their
+    /// the ADB pairs by priority; pairs whose turn comes after the deadline keep their
     /// previous answer ([`Method::Coherence`](super::Method::Coherence)). Results then depend
     /// on timing: use `NodePairs` for reproducible runs.
     Time(Duration),
