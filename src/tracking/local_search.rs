@@ -1,0 +1,262 @@
+//! Local search: move a triangle pair to a locally closest pair by strict descent over the
+//! neighbours that the mesh topology gives, with a deterministic tie-break.
+
+use glam::DVec3;
+use smallvec::SmallVec;
+
+use super::config::SearchMode;
+use super::feature::{Feature, reduce_to_feature};
+use super::surface::Placed;
+use crate::geometry::{ClosestPoints, closest_points_triangle_triangle};
+use crate::mesh::Topology;
+
+/// Where a pair's search ended.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Located {
+    pub ta: u32,
+    pub tb: u32,
+    pub cp: ClosestPoints,
+    pub fa: Feature,
+    pub fb: Feature,
+}
+
+/// Counters of one frame's searches.
+#[derive(Debug, Default, Clone, Copy)]
+pub(crate) struct SearchCounters {
+    pub iterations: u64,
+    pub evaluations: u64,
+}
+
+/// Two triangles of one mesh that share a vertex.
+#[inline]
+pub(crate) fn adjacent(a: [u32; 3], b: [u32; 3]) -> bool {
+    a.iter().any(|v| b.contains(v))
+}
+
+/// Whether triangles `a` and `b` of a mesh with `topology` are within `rings` edge steps of
+/// each other: with 0 they share a vertex; with 1 they share a vertex or an edge joins a
+/// vertex of one to a vertex of the other; and so on. Self-collision excludes such pairs.
+pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rings: u32) -> bool {
+    if adjacent(a, b) {
+        return true;
+    }
+    match rings {
+        0 => false,
+        1 => a
+            .iter()
+            .any(|&v| topology.vertex_neighbours(v).iter().any(|w| b.contains(w))),
+        _ => {
+            let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
+            let mut frontier: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
+            for _ in 0..rings {
+                let mut next: SmallVec<[u32; 64]> = SmallVec::new();
+                for &v in &frontier {
+                    for &w in topology.vertex_neighbours(v) {
+                        if b.contains(&w) {
+                            return true;
+                        }
+                        if !seen.contains(&w) {
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                frontier = next;
+            }
+            false
+        }
+    }
+}
+
+fn bounds(t: &[DVec3; 3]) -> (DVec3, DVec3) {
+    (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+}
+
+/// A lower bound of the distance of two triangles: the gap of their boxes.
+#[inline]
+fn box_gap(a: &(DVec3, DVec3), b: &(DVec3, DVec3)) -> f64 {
+    (a.0 - b.1).max(b.0 - a.1).max(DVec3::ZERO).length()
+}
+
+pub(crate) struct Searcher<'a> {
+    pub a: Placed<'a>,
+    pub b: Placed<'a>,
+    /// One mesh against itself: adjacent triangles are excluded.
+    pub self_mode: bool,
+    pub mode: SearchMode,
+    pub max_iterations: u32,
+    /// Strict-decrease margin (absolute).
+    pub epsilon: f64,
+    /// Contact distance: self pairs within it are never treated as sliding.
+    pub thickness: f64,
+    /// Self pairs within this many rings are excluded (see [`triangles_within_rings`]).
+    pub exclusion_rings: u32,
+}
+
+/// A candidate pair with its corners and closest points.
+type Candidate = (u32, u32, [DVec3; 3], [DVec3; 3], ClosestPoints);
+
+/// Outcome of one descent step.
+enum Step {
+    Moved(Located),
+    Stuck,
+    /// A self pair whose neighbourhood touches its partner: it slides along the sheet.
+    Sliding,
+}
+
+impl Searcher<'_> {
+    pub fn excluded(&self, ta: u32, tb: u32) -> bool {
+        self.self_mode
+            && (ta == tb
+                || triangles_within_rings(
+                    self.a.topology(),
+                    self.a.corners(ta),
+                    self.b.corners(tb),
+                    self.exclusion_rings,
+                ))
+    }
+
+    pub fn locate(&self, ta: u32, tb: u32, counters: &mut SearchCounters) -> Located {
+        counters.evaluations += 1;
+        let (a, b) = (self.a.triangle(ta), self.b.triangle(tb));
+        let cp = closest_points_triangle_triangle(&a, &b);
+        self.located(ta, tb, &a, &b, cp)
+    }
+
+    fn located(
+        &self,
+        ta: u32,
+        tb: u32,
+        a: &[DVec3; 3],
+        b: &[DVec3; 3],
+        cp: ClosestPoints,
+    ) -> Located {
+        let fa = reduce_to_feature(cp.point_a, ta, a, self.a.corners(ta), self.a.topology());
+        let fb = reduce_to_feature(cp.point_b, tb, b, self.b.corners(tb), self.b.topology());
+        Located { ta, tb, cp, fa, fb }
+    }
+
+    /// Triangles to try instead of `t`, whose closest feature is `f`: around a closest corner
+    /// or edge, all triangles at those corners; from a face, the edge-adjacent triangles.
+    fn candidates(side: &Placed, t: u32, f: Feature, out: &mut SmallVec<[u32; 48]>) {
+        out.clear();
+        let topo = side.topology();
+        match f {
+            Feature::Vertex(v) => out.extend_from_slice(topo.vertex_triangles(v)),
+            Feature::Edge(e) => {
+                let [v0, v1] = topo.edge(e).vertices;
+                out.extend_from_slice(topo.vertex_triangles(v0));
+                out.extend_from_slice(topo.vertex_triangles(v1));
+                out.sort_unstable();
+                out.dedup();
+            }
+            Feature::Triangle(_) => out.extend_from_slice(topo.triangle_neighbours(t)),
+        }
+        out.retain(|x| *x != t);
+    }
+
+    /// Strict descent from `(ta, tb)` until no neighbour pair is closer by more than
+    /// `epsilon`, or `max_iterations` steps. Ties keep the first (ascending) candidate.
+    /// Returns where it stopped and whether it stopped because the pair was sliding (a self
+    /// pair farther than the thickness whose neighbourhood touches its partner: descent from
+    /// it slides along the sheet into the excluded zone instead of across a gap, so it is not
+    /// a contact between distinct parts of the surface).
+    pub fn descend(&self, start: Located, counters: &mut SearchCounters) -> (Located, bool) {
+        let mut cur = start;
+        let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
+        let mut cb: SmallVec<[u32; 48]> = SmallVec::new();
+        for _ in 0..self.max_iterations {
+            if cur.cp.distance == 0.0 {
+                break; // Nothing is strictly closer than touching.
+            }
+            counters.iterations += 1;
+            let mut moved = false;
+            match self.mode {
+                SearchMode::TwoStep => {
+                    Self::candidates(&self.a, cur.ta, cur.fa, &mut ca);
+                    match self.best_of(&cur, ca.iter().map(|&x| (x, cur.tb)), counters) {
+                        Step::Moved(n) => (cur, moved) = (n, true),
+                        Step::Sliding => return (cur, true),
+                        Step::Stuck => {}
+                    }
+                    Self::candidates(&self.b, cur.tb, cur.fb, &mut cb);
+                    match self.best_of(&cur, cb.iter().map(|&y| (cur.ta, y)), counters) {
+                        Step::Moved(n) => (cur, moved) = (n, true),
+                        Step::Sliding => return (cur, true),
+                        Step::Stuck => {}
+                    }
+                }
+                SearchMode::Full => {
+                    Self::candidates(&self.a, cur.ta, cur.fa, &mut ca);
+                    Self::candidates(&self.b, cur.tb, cur.fb, &mut cb);
+                    ca.insert(0, cur.ta);
+                    cb.insert(0, cur.tb);
+                    let pairs = ca
+                        .iter()
+                        .flat_map(|&x| cb.iter().map(move |&y| (x, y)))
+                        .filter(|&p| p != (cur.ta, cur.tb));
+                    match self.best_of(&cur, pairs, counters) {
+                        Step::Moved(n) => (cur, moved) = (n, true),
+                        Step::Sliding => return (cur, true),
+                        Step::Stuck => {}
+                    }
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        (cur, false)
+    }
+
+    /// The candidate strictly closer than `cur` by more than `epsilon` (the closest; the
+    /// first of equals), skipping excluded pairs and those whose boxes are already too far.
+    fn best_of(
+        &self,
+        cur: &Located,
+        candidates: impl Iterator<Item = (u32, u32)>,
+        counters: &mut SearchCounters,
+    ) -> Step {
+        let mut best_d = cur.cp.distance - self.epsilon;
+        let mut best: Option<Candidate> = None;
+        let may_slide = self.self_mode && cur.cp.distance > self.thickness;
+        for (x, y) in candidates {
+            if self.excluded(x, y) {
+                if may_slide {
+                    return Step::Sliding;
+                }
+                continue;
+            }
+            let (a, b) = (self.a.triangle(x), self.b.triangle(y));
+            if box_gap(&bounds(&a), &bounds(&b)) >= best_d {
+                continue;
+            }
+            counters.evaluations += 1;
+            let cp = closest_points_triangle_triangle(&a, &b);
+            if cp.distance < best_d {
+                best_d = cp.distance;
+                best = Some((x, y, a, b, cp));
+            }
+        }
+        match best {
+            Some((x, y, a, b, cp)) => Step::Moved(self.located(x, y, &a, &b, cp)),
+            None => Step::Stuck,
+        }
+    }
+
+    /// Whether a self pair farther than the thickness lies within one ring of adjacency: some
+    /// triangle around its closest features touches the partner triangle (see
+    /// [`Searcher::descend`]).
+    pub fn sliding(&self, l: &Located) -> bool {
+        if !self.self_mode || l.cp.distance <= self.thickness {
+            return false;
+        }
+        let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
+        Self::candidates(&self.a, l.ta, l.fa, &mut ca);
+        if ca.iter().any(|&x| self.excluded(x, l.tb)) {
+            return true;
+        }
+        Self::candidates(&self.b, l.tb, l.fb, &mut ca);
+        ca.iter().any(|&y| self.excluded(l.ta, y))
+    }
+}
