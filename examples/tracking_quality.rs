@@ -13,7 +13,8 @@
 //! (a tenth of the mean edge length) that are not adjacent in the tracker's sense (within one
 //! vertex ring, [`triangles_within_rings`]); a *contact region* is a connected set of
 //! them (triangles linked by a contact pair or a shared vertex), followed from frame to frame
-//! while it keeps a vertex in common with its previous shape. The tracker runs on the same
+//! while it keeps a vertex in common with its previous shape or a contact point within two
+//! tolerances of one of its previous points (regions move). The tracker runs on the same
 //! positions; a contact it reports *hits* a region when it lies within thickness + tolerance
 //! (one mean edge length) of one of the region's exact contact points, and is *false* when it
 //! hits none.
@@ -24,7 +25,8 @@
 //! update + step), `exact_us_per_frame` (refit + exact pass), `time_ratio`, `pairs_per_frame`,
 //! and the same for each `sweep` entry. Writes `frames.csv`, `sweep.csv`,
 //! `recall_vs_pairs.svg` and `time_vs_pairs.svg` to `--out-dir` (default
-//! `target/tracking_quality`).
+//! `target/tracking_quality`). With `TRACKING_QUALITY_DEBUG=1`, each missed region is listed
+//! (first frame, frames alive, largest number of exact pairs).
 
 use std::collections::HashMap;
 use std::fmt::Write as _;
@@ -190,7 +192,13 @@ impl UnionFind {
     }
 }
 
-fn exact_truth(mesh: &TriMesh, whirl: &Whirl, thickness: f32, exclusion_rings: u32) -> Truth {
+fn exact_truth(
+    mesh: &TriMesh,
+    whirl: &Whirl,
+    thickness: f32,
+    exclusion_rings: u32,
+    continuity: f32,
+) -> Truth {
     let topology = Topology::new(mesh);
     let mut cm = CollisionMesh::new(mesh.clone());
     let mut ws = QueryWorkspace::new();
@@ -200,6 +208,9 @@ fn exact_truth(mesh: &TriMesh, whirl: &Whirl, thickness: f32, exclusion_rings: u
     let mut first_seen = Vec::new();
     // Vertex → track id of the previous frame's region that used it.
     let mut prev_mark: HashMap<u32, usize> = HashMap::new();
+    // The previous frame's contact points, with their tracks.
+    let mut prev_points: Vec<(Vec3, usize)> = Vec::new();
+    let mut near = Vec::new();
     let tris = mesh.triangles();
     for f in 0..whirl.frames() {
         whirl.positions(f, &mut positions);
@@ -234,8 +245,28 @@ fn exact_truth(mesh: &TriMesh, whirl: &Whirl, thickness: f32, exclusion_rings: u
                 }
             }
         }
-        // Components → regions, each inheriting the oldest track it touches.
+        let pair_points: Vec<(Vec3, u32)> = pairs
+            .iter()
+            .map(|c| {
+                let a = cm.mesh().triangle(c.pair.a as usize).map(|p| p.as_dvec3());
+                let b = cm.mesh().triangle(c.pair.b as usize).map(|p| p.as_dvec3());
+                let cp = closest_points_triangle_triangle(&a, &b);
+                let root = uf.find(ids[&c.pair.a]);
+                (((cp.point_a + cp.point_b) * 0.5).as_vec3(), root)
+            })
+            .collect();
+        // Components → regions, each inheriting the oldest track it touches: through a
+        // shared vertex, or a contact point within `continuity` of one of the track's last
+        // points (a region that moved).
         let mut comp_track: HashMap<u32, usize> = HashMap::new();
+        let prev_grid = PointGrid::new(&prev_points, continuity);
+        for &(p, root) in &pair_points {
+            prev_grid.regions_near(p, &prev_points, &mut near);
+            if let Some(&old) = near.iter().min() {
+                let e = comp_track.entry(root).or_insert(old);
+                *e = (*e).min(old);
+            }
+        }
         let mut mark = HashMap::new();
         let mut sorted: Vec<(u32, u32)> = ids.iter().map(|(&t, &i)| (t, i)).collect();
         sorted.sort_unstable();
@@ -264,20 +295,12 @@ fn exact_truth(mesh: &TriMesh, whirl: &Whirl, thickness: f32, exclusion_rings: u
                 mark.insert(v, regions[r].track);
             }
         }
-        let points = pairs
+        let points: Vec<(Vec3, usize)> = pair_points
             .iter()
-            .map(|c| {
-                let a = cm.mesh().triangle(c.pair.a as usize).map(|p| p.as_dvec3());
-                let b = cm.mesh().triangle(c.pair.b as usize).map(|p| p.as_dvec3());
-                let cp = closest_points_triangle_triangle(&a, &b);
-                let root = uf.find(ids[&c.pair.a]);
-                (
-                    ((cp.point_a + cp.point_b) * 0.5).as_vec3(),
-                    region_of_root[&root],
-                )
-            })
+            .map(|&(p, root)| (p, region_of_root[&root]))
             .collect();
         prev_mark = mark;
+        prev_points = points.iter().map(|&(p, r)| (p, regions[r].track)).collect();
         frames.push(ExactFrame {
             us,
             pairs: pairs.len(),
@@ -307,7 +330,7 @@ impl PointGrid {
         let q = (p / cell).floor();
         (q.x as i32, q.y as i32, q.z as i32)
     }
-    /// Regions with a point within `cell` of `p`.
+    /// Labels (regions, or tracks) of the points within `cell` of `p`.
     fn regions_near(&self, p: Vec3, points: &[(Vec3, usize)], out: &mut Vec<usize>) {
         out.clear();
         let (x, y, z) = Self::key(p, self.cell);
@@ -398,7 +421,22 @@ fn run_tracker(
     let frames = truth.frames.len();
     let (mut counted, mut detected) = (0usize, 0usize);
     let mut latencies = Vec::new();
+    let debug = std::env::var_os("TRACKING_QUALITY_DEBUG").is_some();
     for (track, &t0) in truth.first_seen.iter().enumerate() {
+        if debug && first_hit[track].is_none_or(|h| h - t0 > LATENCY_LIMIT) {
+            let (frames_alive, max_points) = truth.frames.iter().fold((0, 0), |(n, m), fr| {
+                let pts = fr
+                    .points
+                    .iter()
+                    .filter(|(_, r)| fr.regions[*r].track == track)
+                    .count();
+                (n + usize::from(pts > 0), m.max(pts))
+            });
+            eprintln!(
+                "missed track {track}: t0 {t0}, hit {:?}, alive {frames_alive} frames, up to {max_points} pairs",
+                first_hit[track]
+            );
+        }
         let hit = first_hit[track];
         let in_time = hit.is_some_and(|h| h - t0 <= LATENCY_LIMIT);
         if let Some(h) = hit {
@@ -536,7 +574,13 @@ fn main() {
         config.thickness,
         tolerance
     );
-    let truth = exact_truth(&mesh, &whirl, config.thickness, config.exclusion_rings);
+    let truth = exact_truth(
+        &mesh,
+        &whirl,
+        config.thickness,
+        config.exclusion_rings,
+        config.thickness + 2.0 * tolerance,
+    );
     let mut counts: Vec<usize> = settings.sweep.clone().unwrap_or_default();
     if !counts.contains(&settings.pairs) {
         counts.push(settings.pairs);
