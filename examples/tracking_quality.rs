@@ -14,7 +14,8 @@
 //! vertex ring, [`triangles_within_rings`]); a *contact region* is a connected set of
 //! them (triangles linked by a contact pair or a shared vertex), followed from frame to frame
 //! while it keeps a vertex in common with its previous shape or a contact point within two
-//! tolerances of one of its previous points (regions move). The tracker runs on the same
+//! tolerances of one of its previous points (regions move); regions that merge are followed
+//! on together (hitting the merged region detects each). The tracker runs on the same
 //! positions; a contact it reports *hits* a region when it lies within thickness + tolerance
 //! (one mean edge length) of one of the region's exact contact points, and is *false* when it
 //! hits none.
@@ -136,8 +137,10 @@ fn parse_args() -> Result<Settings, String> {
 
 /// One exact contact region in one frame.
 struct Region {
-    /// Track id (stable while the region persists).
-    track: usize,
+    /// The tracks it continues, ascending: a new region starts a track; a region that moved
+    /// continues its own; regions that merged continue all of theirs (hitting the merged
+    /// region detects each of them).
+    tracks: Vec<usize>,
 }
 
 /// The exact answer of one frame.
@@ -206,9 +209,10 @@ fn exact_truth(
     let mut positions = Vec::new();
     let mut frames = Vec::new();
     let mut first_seen = Vec::new();
-    // Vertex → track id of the previous frame's region that used it.
+    // Vertex → the previous frame's region that used it.
     let mut prev_mark: HashMap<u32, usize> = HashMap::new();
-    // The previous frame's contact points, with their tracks.
+    let mut prev_regions: Vec<Region> = Vec::new();
+    // The previous frame's contact points, with their regions.
     let mut prev_points: Vec<(Vec3, usize)> = Vec::new();
     let mut near = Vec::new();
     let tris = mesh.triangles();
@@ -255,44 +259,51 @@ fn exact_truth(
                 (((cp.point_a + cp.point_b) * 0.5).as_vec3(), root)
             })
             .collect();
-        // Components → regions, each inheriting the oldest track it touches: through a
-        // shared vertex, or a contact point within `continuity` of one of the track's last
-        // points (a region that moved).
-        let mut comp_track: HashMap<u32, usize> = HashMap::new();
+        // Components → regions, each continuing the tracks of the previous regions it
+        // touches: through a shared vertex, or a contact point within `continuity` of one of
+        // their points (a region that moved).
+        let mut inherited: HashMap<u32, Vec<usize>> = HashMap::new();
         let prev_grid = PointGrid::new(&prev_points, continuity);
         for &(p, root) in &pair_points {
             prev_grid.regions_near(p, &prev_points, &mut near);
-            if let Some(&old) = near.iter().min() {
-                let e = comp_track.entry(root).or_insert(old);
-                *e = (*e).min(old);
+            for &r in &near {
+                inherited
+                    .entry(root)
+                    .or_default()
+                    .extend_from_slice(&prev_regions[r].tracks);
             }
         }
-        let mut mark = HashMap::new();
         let mut sorted: Vec<(u32, u32)> = ids.iter().map(|(&t, &i)| (t, i)).collect();
         sorted.sort_unstable();
         for &(t, i) in &sorted {
             let root = uf.find(i);
             for v in tris[t as usize] {
-                if let Some(&old) = prev_mark.get(&v) {
-                    let e = comp_track.entry(root).or_insert(old);
-                    *e = (*e).min(old);
+                if let Some(&r) = prev_mark.get(&v) {
+                    inherited
+                        .entry(root)
+                        .or_default()
+                        .extend_from_slice(&prev_regions[r].tracks);
                 }
             }
         }
-        let mut regions = Vec::new();
+        let mut regions: Vec<Region> = Vec::new();
         let mut region_of_root: HashMap<u32, usize> = HashMap::new();
+        let mut mark = HashMap::new();
         for &(t, i) in &sorted {
             let root = uf.find(i);
             let r = *region_of_root.entry(root).or_insert_with(|| {
-                let track = *comp_track.entry(root).or_insert_with(|| {
+                let mut tracks = inherited.remove(&root).unwrap_or_default();
+                tracks.sort_unstable();
+                tracks.dedup();
+                if tracks.is_empty() {
                     first_seen.push(f);
-                    first_seen.len() - 1
-                });
-                regions.push(Region { track });
+                    tracks.push(first_seen.len() - 1);
+                }
+                regions.push(Region { tracks });
                 regions.len() - 1
             });
             for v in tris[t as usize] {
-                mark.insert(v, regions[r].track);
+                mark.insert(v, r);
             }
         }
         let points: Vec<(Vec3, usize)> = pair_points
@@ -300,7 +311,13 @@ fn exact_truth(
             .map(|&(p, root)| (p, region_of_root[&root]))
             .collect();
         prev_mark = mark;
-        prev_points = points.iter().map(|&(p, r)| (p, regions[r].track)).collect();
+        prev_points = points.clone();
+        prev_regions = regions
+            .iter()
+            .map(|r| Region {
+                tracks: r.tracks.clone(),
+            })
+            .collect();
         frames.push(ExactFrame {
             us,
             pairs: pairs.len(),
@@ -399,12 +416,13 @@ fn run_tracker(
                 false_here += 1;
             }
             for &r in &near {
-                let track = exact.regions[r].track;
-                if first_hit[track].is_none() {
-                    first_hit[track] = Some(f);
-                }
-                if !hit_here.contains(&track) {
-                    hit_here.push(track);
+                for &track in &exact.regions[r].tracks {
+                    if first_hit[track].is_none() {
+                        first_hit[track] = Some(f);
+                    }
+                    if !hit_here.contains(&track) {
+                        hit_here.push(track);
+                    }
                 }
             }
         }
@@ -428,7 +446,7 @@ fn run_tracker(
                 let pts = fr
                     .points
                     .iter()
-                    .filter(|(_, r)| fr.regions[*r].track == track)
+                    .filter(|(_, r)| fr.regions[*r].tracks.contains(&track))
                     .count();
                 (n + usize::from(pts > 0), m.max(pts))
             });

@@ -220,23 +220,30 @@ impl Searcher<'_> {
         let mut best_d = cur.cp.distance - self.epsilon;
         let mut best: Option<Candidate> = None;
         let may_slide = self.self_mode && cur.cp.distance > self.thickness;
+        let mut closest_excluded = f64::INFINITY;
         for (x, y) in candidates {
-            if self.excluded(x, y) {
-                if may_slide {
-                    return Step::Sliding;
-                }
+            let excluded = self.excluded(x, y);
+            if excluded && !may_slide {
                 continue;
             }
             let (a, b) = (self.a.triangle(x), self.b.triangle(y));
-            if box_gap(&bounds(&a), &bounds(&b)) >= best_d {
+            let bound = if excluded { closest_excluded.min(best_d) } else { best_d };
+            if box_gap(&bounds(&a), &bounds(&b)) >= bound {
                 continue;
             }
             counters.evaluations += 1;
             let cp = closest_points_triangle_triangle(&a, &b);
-            if cp.distance < best_d {
+            if excluded {
+                closest_excluded = closest_excluded.min(cp.distance);
+            } else if cp.distance < best_d {
                 best_d = cp.distance;
                 best = Some((x, y, a, b, cp));
             }
+        }
+        // The descent would rather step into the excluded zone than across a gap: the pair
+        // slides along the sheet.
+        if closest_excluded < best_d {
+            return Step::Sliding;
         }
         match best {
             Some((x, y, a, b, cp)) => Step::Moved(self.located(x, y, &a, &b, cp)),
@@ -244,19 +251,22 @@ impl Searcher<'_> {
         }
     }
 
-    /// Whether a self pair farther than the thickness lies within one ring of adjacency: some
-    /// triangle around its closest features touches the partner triangle (see
-    /// [`Searcher::descend`]).
+    /// Whether a self pair farther than the thickness would step into the excluded zone: some
+    /// excluded neighbour pair is strictly closer than it (see [`Searcher::descend`]).
     pub fn sliding(&self, l: &Located) -> bool {
         if !self.self_mode || l.cp.distance <= self.thickness {
             return false;
         }
         let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
+        let mut cb: SmallVec<[u32; 48]> = SmallVec::new();
         Self::candidates(&self.a, l.ta, l.fa, &mut ca);
-        if ca.iter().any(|&x| self.excluded(x, l.tb)) {
-            return true;
-        }
-        Self::candidates(&self.b, l.tb, l.fb, &mut ca);
-        ca.iter().any(|&y| self.excluded(l.ta, y))
+        Self::candidates(&self.b, l.tb, l.fb, &mut cb);
+        let closer = |x: u32, y: u32| {
+            self.excluded(x, y)
+                && closest_points_triangle_triangle(&self.a.triangle(x), &self.b.triangle(y))
+                    .distance
+                    < l.cp.distance - self.epsilon
+        };
+        ca.iter().any(|&x| closer(x, l.tb)) || cb.iter().any(|&y| closer(l.ta, y))
     }
 }

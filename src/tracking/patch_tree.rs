@@ -4,7 +4,7 @@
 
 use glam::{DMat3, DVec3, Vec3};
 
-use crate::bvh::Bvh;
+use crate::bvh::{Bvh, BvhNode};
 use crate::geometry::PoseF64;
 use crate::mesh::TriMesh;
 
@@ -24,6 +24,8 @@ struct Node {
 /// A patch: a set of triangles contiguous in the mesh's BVH, with its vertices.
 #[derive(Debug, Clone)]
 pub(crate) struct Patch {
+    /// The patch's subtree root in [`PatchTree::bvh`].
+    pub node: u32,
     /// Triangle indices.
     pub triangles: Vec<u32>,
     /// Distinct vertex indices of those triangles, ascending.
@@ -36,6 +38,24 @@ pub(crate) struct Patch {
     pub min: Vec3,
     /// Current box.
     pub max: Vec3,
+    /// Axis of the patch's normal cone (area-weighted mean normal), from
+    /// [`PatchTree::update_cones`].
+    pub cone_axis: Vec3,
+    /// Half-angle of the normal cone, radians (π when the normals do not fit a hemisphere's
+    /// worth of directions around a mean).
+    pub cone_angle: f32,
+}
+
+/// Half-angle of the smallest cone holding two cones (axes unit vectors).
+fn merged_cone(a: Vec3, ta: f32, b: Vec3, tb: f32) -> f32 {
+    let phi = a.dot(b).clamp(-1.0, 1.0).acos();
+    if phi + tb <= ta {
+        ta
+    } else if phi + ta <= tb {
+        tb
+    } else {
+        0.5 * (ta + tb + phi)
+    }
 }
 
 /// A BVH cut off at patches of at most `patch_size` triangles (see the module docs).
@@ -43,6 +63,11 @@ pub(crate) struct Patch {
 pub(crate) struct PatchTree {
     nodes: Vec<Node>,
     pub patches: Vec<Patch>,
+    /// The patch of each triangle.
+    pub patch_of: Vec<u32>,
+    /// The full BVH below the cut (refitted with the patches), for random descents inside a
+    /// patch pair down to leaves of a few triangles.
+    pub bvh: Bvh,
 }
 
 impl PatchTree {
@@ -63,6 +88,8 @@ impl PatchTree {
         let mut tree = PatchTree {
             nodes: Vec::new(),
             patches: Vec::new(),
+            patch_of: vec![0; mesh.triangle_count()],
+            bvh: Bvh::build(&TriMesh::new(vec![Vec3::ZERO; 3], vec![[0, 1, 2]]).expect("valid")),
         };
         // Breadth-first copy so that siblings are adjacent and children follow parents.
         tree.nodes.push(Node {
@@ -83,13 +110,19 @@ impl PatchTree {
                     .collect();
                 vertices.sort_unstable();
                 vertices.dedup();
+                for &t in &triangles {
+                    tree.patch_of[t as usize] = tree.patches.len() as u32;
+                }
                 tree.nodes[new].patch = tree.patches.len() as u32;
                 tree.patches.push(Patch {
+                    node: old,
                     triangles,
                     vertices,
                     near: Vec::new(),
                     min: n.min,
                     max: n.max,
+                    cone_axis: Vec3::Y,
+                    cone_angle: std::f32::consts::PI,
                 });
             } else {
                 let left = tree.nodes.len() as u32;
@@ -135,21 +168,19 @@ impl PatchTree {
             near.dedup();
             tree.patches[p].near = near;
         }
-        tree.refit(mesh.positions());
+        tree.bvh = bvh;
+        tree.refit(mesh);
         tree
     }
 
-    /// Recomputes every box from `positions`: patches from their vertices, then the inner
-    /// nodes bottom-up. `O(vertices)`.
-    pub fn refit(&mut self, positions: &[Vec3]) {
+    /// Recomputes every box from `mesh`'s current positions: the BVH below the cut (`O(n)`),
+    /// whose patch roots give the patches' boxes, then the nodes above the cut.
+    pub fn refit(&mut self, mesh: &TriMesh) {
+        self.bvh.refit(mesh);
+        let bn = self.bvh.nodes();
         for patch in &mut self.patches {
-            let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-            for &v in &patch.vertices {
-                let p = positions[v as usize];
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-            (patch.min, patch.max) = (lo, hi);
+            let n = &bn[patch.node as usize];
+            (patch.min, patch.max) = (n.min, n.max);
         }
         for i in (0..self.nodes.len()).rev() {
             let n = self.nodes[i];
@@ -168,8 +199,45 @@ impl PatchTree {
         }
     }
 
-    /// Pairs of patches, not [`Patch::near`] each other, whose boxes come within `margin`, each once
-    /// (`a < b`), appended to `out`.
+    /// Recomputes every patch's normal cone from `mesh`'s current positions (`O(triangles)`).
+    pub fn update_cones(&mut self, mesh: &TriMesh) {
+        for patch in &mut self.patches {
+            let normals = patch.triangles.iter().map(|&t| {
+                let [a, b, c] = mesh.triangle(t as usize);
+                (b - a).cross(c - a)
+            });
+            let axis = normals.clone().sum::<Vec3>().normalize_or_zero();
+            let mut angle: f32 = 0.0;
+            if axis == Vec3::ZERO {
+                angle = std::f32::consts::PI;
+            } else {
+                for n in normals {
+                    let n = n.normalize_or_zero();
+                    if n != Vec3::ZERO {
+                        angle = angle.max(axis.dot(n).clamp(-1.0, 1.0).acos());
+                    }
+                }
+            }
+            patch.cone_axis = if axis == Vec3::ZERO { Vec3::Y } else { axis };
+            patch.cone_angle = angle;
+        }
+    }
+
+    /// Whether the surface of patches `a` and `b` (possibly the same) may fold enough to touch
+    /// itself: their normals do not fit in an open hemisphere (the curvature criterion of
+    /// Volino and Magnenat-Thalmann for self-collision).
+    fn folds(&self, a: u32, b: u32) -> bool {
+        let (pa, pb) = (&self.patches[a as usize], &self.patches[b as usize]);
+        // Normals in an open hemisphere cannot meet; exactly opposite sheets (a flat fold)
+        // have a half-angle of exactly 90°.
+        merged_cone(pa.cone_axis, pa.cone_angle, pb.cone_axis, pb.cone_angle)
+            >= std::f32::consts::FRAC_PI_2 - 1e-3
+    }
+
+    /// Candidate patch pairs for self-collision whose boxes come within `margin`, each once
+    /// (`a <= b`), appended to `out`: patches far apart on the surface (not [`Patch::near`]
+    /// each other), and patches that are the same or near each other but fold (their normals
+    /// leave a half-space; [`PatchTree::update_cones`] must be current).
     pub fn self_overlaps(
         &self,
         margin: f32,
@@ -184,6 +252,9 @@ impl PatchTree {
         while let Some((i, j)) = stack.pop() {
             let (ni, nj) = (&self.nodes[i as usize], &self.nodes[j as usize]);
             if i == j {
+                if ni.patch != NONE && self.folds(ni.patch, ni.patch) {
+                    out.push((ni.patch, ni.patch));
+                }
                 if ni.patch == NONE {
                     let l = ni.left;
                     stack.push((l, l));
@@ -196,7 +267,7 @@ impl PatchTree {
             }
             if ni.patch != NONE && nj.patch != NONE {
                 let (a, b) = (ni.patch.min(nj.patch), ni.patch.max(nj.patch));
-                if self.patches[a as usize].near.binary_search(&b).is_err() {
+                if self.patches[a as usize].near.binary_search(&b).is_err() || self.folds(a, b) {
                     out.push((a, b));
                 }
                 continue;
@@ -223,17 +294,9 @@ impl PatchTree {
         stack: &mut Vec<(u32, u32)>,
         out: &mut Vec<(u32, u32)>,
     ) {
-        let rot = DMat3::from_quat(rel.rotation);
-        let abs = DMat3::from_cols(rot.x_axis.abs(), rot.y_axis.abs(), rot.z_axis.abs());
-        let moved = |n: &Node| -> (Vec3, Vec3) {
-            let c = (n.min + n.max).as_dvec3() * 0.5;
-            let h = (n.max - n.min).as_dvec3() * 0.5;
-            let c = rot * c + rel.translation;
-            let h = abs * h + DVec3::splat(1e-6 * (c.abs().max_element() + h.max_element()));
-            ((c - h).as_vec3(), (c + h).as_vec3())
-        };
+        let xf = box_transform(rel);
         let overlap = |a: &Node, b: &Node| {
-            let (lo, hi) = moved(b);
+            let (lo, hi) = placed_box_of(b.min, b.max, Some(&xf));
             (a.min - margin).cmple(hi).all() && lo.cmple(a.max + margin).all()
         };
         stack.clear();
@@ -266,6 +329,87 @@ impl PatchTree {
     }
 }
 
+/// The box `[min, max]`, moved by `rel` (bounds of the moved box) when given.
+#[inline]
+fn placed_box_of(min: Vec3, max: Vec3, rel: Option<&(DMat3, DMat3, DVec3)>) -> (Vec3, Vec3) {
+    match rel {
+        None => (min, max),
+        Some((rot, abs, t)) => {
+            let c = (min + max).as_dvec3() * 0.5;
+            let h = (max - min).as_dvec3() * 0.5;
+            let c = *rot * c + *t;
+            let h = *abs * h + DVec3::splat(1e-6 * (c.abs().max_element() + h.max_element()));
+            ((c - h).as_vec3(), (c + h).as_vec3())
+        }
+    }
+}
+
+/// The rotation, its absolute value and the translation of `rel`, for [`placed_box`].
+pub(crate) fn box_transform(rel: &PoseF64) -> (DMat3, DMat3, DVec3) {
+    let rot = DMat3::from_quat(rel.rotation);
+    let abs = DMat3::from_cols(rot.x_axis.abs(), rot.y_axis.abs(), rot.z_axis.abs());
+    (rot, abs, rel.translation)
+}
+
+/// A random walk from BVH nodes `a` (of `ta`) and `b` (of `tb`, placed by `rel`) down to a
+/// pair of leaves whose boxes come within `margin`: at each step the larger node is split and
+/// one of its children that still meets the other node is chosen at random. `None` when no
+/// child meets it (the two subtrees are apart below the patch level). Same node on both sides
+/// (self-collision inside one patch): the walk picks one of the child pairs.
+pub(crate) fn random_leaf_pair(
+    ta: &Bvh,
+    tb: &Bvh,
+    rel: Option<&(DMat3, DMat3, DVec3)>,
+    mut a: u32,
+    mut b: u32,
+    margin: f32,
+    rng: &mut impl rand::RngExt,
+) -> Option<(u32, u32)> {
+    let (na, nb) = (ta.nodes(), tb.nodes());
+    let meets = |x: &BvhNode, y: &BvhNode| {
+        let (lo, hi) = placed_box_of(y.min, y.max, rel);
+        (x.min - margin).cmple(hi).all() && lo.cmple(x.max + margin).all()
+    };
+    loop {
+        let (x, y) = (&na[a as usize], &nb[b as usize]);
+        if x.is_leaf() && y.is_leaf() {
+            return Some((a, b));
+        }
+        if rel.is_none() && a == b {
+            let l = x.left();
+            let mut options = [(l, l), (l + 1, l + 1), (l, l + 1)];
+            let n = if meets(&na[l as usize], &na[l as usize + 1]) { 3 } else { 2 };
+            options.swap(0, rng.random_range(0..n));
+            (a, b) = options[0];
+            continue;
+        }
+        let split_a = !x.is_leaf()
+            && (y.is_leaf() || (x.max - x.min).element_sum() >= (y.max - y.min).element_sum());
+        let mut next: [u32; 2] = [0; 2];
+        let mut count = 0;
+        if split_a {
+            for c in [x.left(), x.left() + 1] {
+                if meets(&na[c as usize], y) {
+                    next[count] = c;
+                    count += 1;
+                }
+            }
+        } else {
+            for c in [y.left(), y.left() + 1] {
+                if meets(x, &nb[c as usize]) {
+                    next[count] = c;
+                    count += 1;
+                }
+            }
+        }
+        if count == 0 {
+            return None;
+        }
+        let pick = next[rng.random_range(0..count)];
+        if split_a { a = pick } else { b = pick }
+    }
+}
+
 fn collect(bvh: &Bvh, node: u32, out: &mut Vec<u32>) {
     let n = &bvh.nodes()[node as usize];
     if n.is_leaf() {
@@ -284,7 +428,7 @@ mod tests {
     #[test]
     fn patches_partition_the_triangles_and_boxes_contain_them() {
         let mesh = generate::torus(1.0, 0.3, 48, 24);
-        let tree = PatchTree::new(&mesh, 32);
+        let mut tree = PatchTree::new(&mesh, 32);
         let mut seen = vec![0u32; mesh.triangle_count()];
         for p in &tree.patches {
             assert!(p.triangles.len() <= 32 && !p.triangles.is_empty());
@@ -299,11 +443,35 @@ mod tests {
         // A closed torus: no two non-adjacent patches of the rest shape overlap much, but
         // far-apart patches never appear as overlapping without their boxes touching.
         let (mut stack, mut out) = (Vec::new(), Vec::new());
+        tree.update_cones(&mesh);
         tree.self_overlaps(0.0, &mut stack, &mut out);
         for &(a, b) in &out {
             let (pa, pb) = (&tree.patches[a as usize], &tree.patches[b as usize]);
             assert!(pa.min.cmple(pb.max).all() && pb.min.cmple(pa.max).all());
-            assert!(pa.near.binary_search(&b).is_err());
+            assert!(pa.near.binary_search(&b).is_err() || tree.folds(a, b));
         }
+        // A flat sheet never folds; one folded in half does, where it folds.
+        let sheet = generate::cloth_grid(1.0, 1.0, 16, 16);
+        let mut tree = PatchTree::new(&sheet, 16);
+        tree.update_cones(&sheet);
+        assert!(tree.patches.iter().all(|p| p.cone_angle < 1e-3));
+        out.clear();
+        tree.self_overlaps(0.0, &mut stack, &mut out);
+        assert!(out.is_empty(), "a flat sheet has no candidate pairs: {out:?}");
+        let folded: Vec<Vec3> = sheet
+            .positions()
+            .iter()
+            .map(|p| if p.x > 0.0 { Vec3::new(-p.x, 0.01, p.z) } else { *p })
+            .collect();
+        let moved = TriMesh::new(folded, sheet.triangles().to_vec()).unwrap();
+        tree.refit(&moved);
+        tree.update_cones(&moved);
+        out.clear();
+        tree.self_overlaps(0.02, &mut stack, &mut out);
+        // The folded half lies over the flat one (far pairs), and the patches at the crease
+        // fold (near pairs or a patch with itself).
+        let near = |&(a, b): &(u32, u32)| a == b || tree.patches[a as usize].near.binary_search(&b).is_ok();
+        assert!(out.iter().any(near), "{out:?}");
+        assert!(out.iter().any(|p| !near(p)), "{out:?}");
     }
 }

@@ -1,12 +1,12 @@
 //! Drawing new random triangle pairs: uniform over area, velocity-weighted, or inside the
 //! overlapping patch pairs of the incomplete hierarchy (Kimmerle et al.).
 
-use glam::Vec3;
 use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::config::Sampling;
 use super::local_search::adjacent;
+use super::patch_tree::{box_transform, random_leaf_pair};
 use super::surface::{Placed, TrackedSurface};
 
 /// Scratch memory of the samplers, reused across frames.
@@ -14,6 +14,7 @@ use super::surface::{Placed, TrackedSurface};
 pub(crate) struct SamplerScratch {
     stack: Vec<(u32, u32)>,
     overlaps: Vec<(u32, u32)>,
+    covered: std::collections::HashSet<(u32, u32)>,
     cdf_a: Vec<f64>,
     cdf_b: Vec<f64>,
     /// Overlapping patch pairs found this frame.
@@ -24,8 +25,9 @@ pub(crate) struct SamplerScratch {
 /// patches, which the hierarchy skips in self-collision).
 const UNIFORM_SHARE: f64 = 0.25;
 
-/// Tries to find a triangle of a patch whose box meets the region of interest.
-const PATCH_TRIES: usize = 8;
+/// Candidate patch pairs tried per sample: a random descent below a pair can dead-end (its
+/// subtrees are apart at a finer level), and then another pair is drawn.
+const DESCENT_TRIES: usize = 8;
 
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn draw(
@@ -35,6 +37,7 @@ pub(crate) fn draw(
     b: &Placed,
     self_mode: bool,
     margin: f32,
+    known: impl Iterator<Item = (u32, u32)>,
     rng: &mut Xoshiro256PlusPlus,
     scratch: &mut SamplerScratch,
     out: &mut Vec<(u32, u32)>,
@@ -69,9 +72,7 @@ pub(crate) fn draw(
         Sampling::Hierarchy => {
             scratch.overlaps.clear();
             if self_mode {
-                a.surface
-                    .patches
-                    .self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
+                a.surface.patches.self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
             } else if let Some(rel) = &b.pose {
                 a.surface.patches.pair_overlaps(
                     &b.surface.patches,
@@ -82,6 +83,20 @@ pub(crate) fn draw(
                 );
             }
             scratch.overlap_count = scratch.overlaps.len();
+            // Patch pairs that already hold a tracked pair or a contact are followed by it (and
+            // by propagation): new samples go where nothing is known yet.
+            scratch.covered.clear();
+            let (of_a, of_b) = (&a.surface.patches.patch_of, &b.surface.patches.patch_of);
+            for (ta, tb) in known {
+                let (x, y) = (of_a[ta as usize], of_b[tb as usize]);
+                scratch
+                    .covered
+                    .insert(if self_mode { (x.min(y), x.max(y)) } else { (x, y) });
+            }
+            if !scratch.covered.is_empty() {
+                let covered = &scratch.covered;
+                scratch.overlaps.retain(|p| !covered.contains(p));
+            }
             let uniform_n = if self_mode {
                 (n as f64 * UNIFORM_SHARE).round() as usize
             } else {
@@ -93,52 +108,51 @@ pub(crate) fn draw(
                 // come within the margin: contacts elsewhere are impossible.
                 return;
             }
+            let xf = b.pose.as_ref().map(box_transform);
+            let (bvh_a, bvh_b) = (&a.surface.patches.bvh, &b.surface.patches.bvh);
             for _ in 0..n - uniform_n {
-                let (pa, pb) = scratch.overlaps[rng.random_range(0..scratch.overlaps.len())];
-                let (patch_a, patch_b) = (
-                    &a.surface.patches.patches[pa as usize],
-                    &b.surface.patches.patches[pb as usize],
-                );
-                // The region where the two patches' boxes meet, in `a`'s frame.
-                let (lo_b, hi_b) = match &b.pose {
-                    None => (patch_b.min, patch_b.max),
-                    Some(rel) => {
-                        let corners = (0..8).map(|k| {
-                            let c = Vec3::new(
-                                if k & 1 == 0 {
-                                    patch_b.min.x
-                                } else {
-                                    patch_b.max.x
-                                },
-                                if k & 2 == 0 {
-                                    patch_b.min.y
-                                } else {
-                                    patch_b.max.y
-                                },
-                                if k & 4 == 0 {
-                                    patch_b.min.z
-                                } else {
-                                    patch_b.max.z
-                                },
-                            );
-                            rel.transform_point(c).as_vec3()
-                        });
-                        corners.fold(
-                            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                            |(l, h), c| (l.min(c), h.max(c)),
-                        )
+                for _ in 0..DESCENT_TRIES {
+                    let (pa, pb) = scratch.overlaps[rng.random_range(0..scratch.overlaps.len())];
+                    let na = a.surface.patches.patches[pa as usize].node;
+                    let nb = b.surface.patches.patches[pb as usize].node;
+                    let Some((la, lb)) =
+                        random_leaf_pair(bvh_a, bvh_b, xf.as_ref(), na, nb, margin, rng)
+                    else {
+                        continue;
+                    };
+                    let (ts_a, ts_b) = (
+                        bvh_a.triangles_of(&bvh_a.nodes()[la as usize]),
+                        bvh_b.triangles_of(&bvh_b.nodes()[lb as usize]),
+                    );
+                    if let Some(pair) = pick_in_leaves(ts_a, ts_b, a, b, self_mode, rng) {
+                        out.push(pair);
+                        break;
                     }
-                };
-                let lo = patch_a.min.max(lo_b) - margin;
-                let hi = patch_a.max.min(hi_b) + margin;
-                let ta = pick_in_region(a, &patch_a.triangles, lo, hi, rng);
-                let tb = pick_in_region(b, &patch_b.triangles, lo, hi, rng);
-                if !self_mode || !adjacent(a.corners(ta), b.corners(tb)) {
-                    out.push((ta, tb));
                 }
             }
         }
     }
+}
+
+/// A random pair of triangles from two leaves (not adjacent in self-collision), if any.
+fn pick_in_leaves(
+    ts_a: &[u32],
+    ts_b: &[u32],
+    a: &Placed,
+    b: &Placed,
+    self_mode: bool,
+    rng: &mut Xoshiro256PlusPlus,
+) -> Option<(u32, u32)> {
+    let (oa, ob) = (rng.random_range(0..ts_a.len()), rng.random_range(0..ts_b.len()));
+    for i in 0..ts_a.len() {
+        for j in 0..ts_b.len() {
+            let (ta, tb) = (ts_a[(oa + i) % ts_a.len()], ts_b[(ob + j) % ts_b.len()]);
+            if !self_mode || (ta != tb && !adjacent(a.corners(ta), b.corners(tb))) {
+                return Some((ta, tb));
+            }
+        }
+    }
+    None
 }
 
 fn uniform(
@@ -159,30 +173,6 @@ fn uniform(
             }
         }
     }
-}
-
-/// A random triangle of `triangles` whose box (in `a`'s frame) meets `[lo, hi]`, within a
-/// few tries (else the last one tried).
-fn pick_in_region(
-    side: &Placed,
-    triangles: &[u32],
-    lo: Vec3,
-    hi: Vec3,
-    rng: &mut Xoshiro256PlusPlus,
-) -> u32 {
-    let mut t = triangles[0];
-    for _ in 0..PATCH_TRIES {
-        t = triangles[rng.random_range(0..triangles.len())];
-        let tri = side.triangle(t).map(|p| p.as_vec3());
-        let (tl, th) = (
-            tri[0].min(tri[1]).min(tri[2]),
-            tri[0].max(tri[1]).max(tri[2]),
-        );
-        if tl.cmple(hi).all() && lo.cmple(th).all() {
-            break;
-        }
-    }
-    t
 }
 
 /// Cumulative weights `area · (ε + displacement)`: fast-moving triangles are drawn more.

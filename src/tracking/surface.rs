@@ -55,7 +55,8 @@ impl TrackedSurface {
             total += 0.5 * (b - a).cross(c - a).length();
             area_cdf.push(total);
         }
-        let patches = PatchTree::new(&mesh, patch_size);
+        let mut patches = PatchTree::new(&mesh, patch_size);
+        patches.update_cones(&mesh);
         TrackedSurface {
             previous: mesh.positions().to_vec(),
             mesh,
@@ -68,7 +69,7 @@ impl TrackedSurface {
     }
 
     /// Moves the vertices (same count, all finite), keeps the old positions as the previous
-    /// frame's, and refits the patch tree. On error nothing changes.
+    /// frame's, and refits the patch tree (boxes and normal cones). On error nothing changes.
     pub fn set_positions(&mut self, positions: &[Vec3]) -> Result<(), MeshError> {
         self.previous.clear();
         self.previous.extend_from_slice(self.mesh.positions());
@@ -77,7 +78,8 @@ impl TrackedSurface {
             self.previous.extend_from_slice(self.mesh.positions());
             return Err(e);
         }
-        self.patches.refit(positions);
+        self.patches.refit(&self.mesh);
+        self.patches.update_cones(&self.mesh);
         Ok(())
     }
 
