@@ -150,6 +150,8 @@ struct ExactFrame {
     regions: Vec<Region>,
     /// Contact points (midpoints of the closest points) and the region of each.
     points: Vec<(Vec3, usize)>,
+    /// The triangle pairs of those points.
+    triangle_pairs: Vec<(u32, u32)>,
 }
 
 struct Truth {
@@ -323,6 +325,7 @@ fn exact_truth(
             pairs: pairs.len(),
             regions,
             points,
+            triangle_pairs: pairs.iter().map(|c| (c.pair.a, c.pair.b)).collect(),
         });
         progress("exact self pass", f + 1, whirl.frames());
     }
@@ -440,6 +443,7 @@ fn run_tracker(
     let (mut counted, mut detected) = (0usize, 0usize);
     let mut latencies = Vec::new();
     let debug = std::env::var_os("TRACKING_QUALITY_DEBUG").is_some();
+    let topology = Topology::new(mesh);
     for (track, &t0) in truth.first_seen.iter().enumerate() {
         if debug && first_hit[track].is_none_or(|h| h - t0 > LATENCY_LIMIT) {
             let (frames_alive, max_points) = truth.frames.iter().fold((0, 0), |(n, m), fr| {
@@ -450,9 +454,19 @@ fn run_tracker(
                     .count();
                 (n + usize::from(pts > 0), m.max(pts))
             });
+            let fr = &truth.frames[t0];
+            let rings: Vec<u32> = fr
+                .points
+                .iter()
+                .zip(&fr.triangle_pairs)
+                .filter(|((_, r), _)| fr.regions[*r].tracks.contains(&track))
+                .map(|(_, &(x, y))| ring_distance(mesh, &topology, x, y, 40))
+                .collect();
             eprintln!(
-                "missed track {track}: t0 {t0}, hit {:?}, alive {frames_alive} frames, up to {max_points} pairs",
-                first_hit[track]
+                "missed track {track}: t0 {t0}, hit {:?}, alive {frames_alive} frames, up to {max_points} pairs, rings at t0 {}..{}",
+                first_hit[track],
+                rings.iter().min().unwrap_or(&0),
+                rings.iter().max().unwrap_or(&0)
             );
         }
         let hit = first_hit[track];
@@ -489,6 +503,29 @@ fn run_tracker(
         exact_us: truth.frames.iter().map(|f| f.us).sum::<f64>() / frames as f64,
         per_frame,
     }
+}
+
+/// Vertex rings between two triangles (0: they share a vertex), up to `limit`.
+fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32) -> u32 {
+    let target = mesh.triangles()[b as usize];
+    let mut seen: std::collections::HashSet<u32> =
+        mesh.triangles()[a as usize].into_iter().collect();
+    let mut front: Vec<u32> = seen.iter().copied().collect();
+    for r in 0..limit {
+        if front.iter().any(|v| target.contains(v)) {
+            return r;
+        }
+        let mut next = Vec::new();
+        for &v in &front {
+            for &w in topology.vertex_neighbours(v) {
+                if seen.insert(w) {
+                    next.push(w);
+                }
+            }
+        }
+        front = next;
+    }
+    limit
 }
 
 fn json_run(r: &RunResult) -> String {

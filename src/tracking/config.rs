@@ -74,7 +74,7 @@ impl Default for TrackerConfig {
             thickness: 0.0,
             far_factor: 1.2,
             far_epsilon: 0.01,
-            exclusion_rings: 1,
+            exclusion_rings: 2,
             redundancy_rings: 2,
             max_active_pairs: 1024,
             propagation_limit: 256,

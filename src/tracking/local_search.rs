@@ -45,6 +45,17 @@ pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rin
         1 => a
             .iter()
             .any(|&v| topology.vertex_neighbours(v).iter().any(|w| b.contains(w))),
+        2 => {
+            // Within two steps: a vertex next to (or of) `a` is next to (or of) `b`.
+            let mut near_b: SmallVec<[u32; 32]> = SmallVec::from_slice(&b);
+            for &v in &b {
+                near_b.extend_from_slice(topology.vertex_neighbours(v));
+            }
+            near_b.sort_unstable();
+            let hit = |w: &u32| near_b.binary_search(w).is_ok();
+            a.iter()
+                .any(|&v| hit(&v) || topology.vertex_neighbours(v).iter().any(hit))
+        }
         _ => {
             let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
             let mut frontier: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
@@ -91,6 +102,9 @@ pub(crate) struct Searcher<'a> {
     pub thickness: f64,
     /// Self pairs within this many rings are excluded (see [`triangles_within_rings`]).
     pub exclusion_rings: u32,
+    /// A sliding self pair farther than this stops its descent at once (closer, it goes on:
+    /// it may be at a tight crease whose two sides touch just beyond the excluded zone).
+    pub slide_limit: f64,
 }
 
 /// A candidate pair with its corners and closest points.
@@ -156,7 +170,7 @@ impl Searcher<'_> {
     }
 
     /// Strict descent from `(ta, tb)` until no neighbour pair is closer by more than
-    /// `epsilon`, or `max_iterations` steps. Ties keep the first (ascending) candidate.
+    /// `epsilon`, the pair is in contact (within the thickness), or `max_iterations` steps. Ties keep the first (ascending) candidate.
     /// Returns where it stopped and whether it stopped because the pair was sliding (a self
     /// pair farther than the thickness whose neighbourhood touches its partner: descent from
     /// it slides along the sheet into the excluded zone instead of across a gap, so it is not
@@ -166,8 +180,10 @@ impl Searcher<'_> {
         let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
         let mut cb: SmallVec<[u32; 48]> = SmallVec::new();
         for _ in 0..self.max_iterations {
-            if cur.cp.distance == 0.0 {
-                break; // Nothing is strictly closer than touching.
+            if cur.cp.distance <= self.thickness {
+                // In contact (nothing is strictly closer than touching): propagation explores
+                // the neighbourhood.
+                break;
             }
             counters.iterations += 1;
             let mut moved = false;
@@ -221,15 +237,37 @@ impl Searcher<'_> {
         let mut best: Option<Candidate> = None;
         let may_slide = self.self_mode && cur.cp.distance > self.thickness;
         let mut closest_excluded = f64::INFINITY;
+        // Separation along the current closest direction bounds every candidate's distance
+        // from below: the gap between the two triangles' projections on it.
+        let gap = cur.cp.point_b - cur.cp.point_a;
+        let dir = if cur.cp.distance > 0.0 {
+            gap / gap.length()
+        } else {
+            DVec3::ZERO
+        };
         for (x, y) in candidates {
             let excluded = self.excluded(x, y);
             if excluded && !may_slide {
                 continue;
             }
             let (a, b) = (self.a.triangle(x), self.b.triangle(y));
-            let bound = if excluded { closest_excluded.min(best_d) } else { best_d };
+            let bound = if excluded {
+                closest_excluded.min(best_d)
+            } else {
+                best_d
+            };
             if box_gap(&bounds(&a), &bounds(&b)) >= bound {
                 continue;
+            }
+            if dir != DVec3::ZERO {
+                let max_a = a
+                    .iter()
+                    .map(|p| p.dot(dir))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let min_b = b.iter().map(|q| q.dot(dir)).fold(f64::INFINITY, f64::min);
+                if min_b - max_a >= bound {
+                    continue;
+                }
             }
             counters.evaluations += 1;
             let cp = closest_points_triangle_triangle(&a, &b);
@@ -241,8 +279,9 @@ impl Searcher<'_> {
             }
         }
         // The descent would rather step into the excluded zone than across a gap: the pair
-        // slides along the sheet.
-        if closest_excluded < best_d {
+        // slides along the sheet. Far from contact, give up at once; near it, go on among the
+        // allowed neighbours, which may reach a contact at a tight crease.
+        if closest_excluded < best_d && cur.cp.distance > self.slide_limit {
             return Step::Sliding;
         }
         match best {
@@ -268,5 +307,53 @@ impl Searcher<'_> {
                     < l.cp.distance - self.epsilon
         };
         ca.iter().any(|&x| closer(x, l.tb)) || cb.iter().any(|&y| closer(l.ta, y))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn ring_fast_paths_agree_with_the_search() {
+        let mesh = generate::torus(1.0, 0.3, 24, 12);
+        let topo = Topology::new(&mesh);
+        let tris = mesh.triangles();
+        // The general breadth-first path, for reference.
+        let slow = |a: [u32; 3], b: [u32; 3], rings: u32| {
+            let mut seen: Vec<u32> = a.to_vec();
+            let mut frontier = seen.clone();
+            if a.iter().any(|v| b.contains(v)) {
+                return true;
+            }
+            for _ in 0..rings {
+                let mut next = Vec::new();
+                for &v in &frontier {
+                    for &w in topo.vertex_neighbours(v) {
+                        if b.contains(&w) {
+                            return true;
+                        }
+                        if !seen.contains(&w) {
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                frontier = next;
+            }
+            false
+        };
+        for i in (0..tris.len()).step_by(7) {
+            for j in 0..tris.len() {
+                for rings in 0..4 {
+                    assert_eq!(
+                        triangles_within_rings(&topo, tris[i], tris[j], rings),
+                        slow(tris[i], tris[j], rings),
+                        "{i} {j} {rings}"
+                    );
+                }
+            }
+        }
     }
 }

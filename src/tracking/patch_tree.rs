@@ -41,21 +41,11 @@ pub(crate) struct Patch {
     /// Axis of the patch's normal cone (area-weighted mean normal), from
     /// [`PatchTree::update_cones`].
     pub cone_axis: Vec3,
-    /// Half-angle of the normal cone, radians (π when the normals do not fit a hemisphere's
-    /// worth of directions around a mean).
-    pub cone_angle: f32,
-}
-
-/// Half-angle of the smallest cone holding two cones (axes unit vectors).
-fn merged_cone(a: Vec3, ta: f32, b: Vec3, tb: f32) -> f32 {
-    let phi = a.dot(b).clamp(-1.0, 1.0).acos();
-    if phi + tb <= ta {
-        ta
-    } else if phi + ta <= tb {
-        tb
-    } else {
-        0.5 * (ta + tb + phi)
-    }
+    /// Cosine and sine of the normal cone's half-angle (a half-angle of π, cosine −1, when
+    /// the normals cancel out).
+    pub cone_cos: f32,
+    /// See `cone_cos`.
+    pub cone_sin: f32,
 }
 
 /// A BVH cut off at patches of at most `patch_size` triangles (see the module docs).
@@ -122,7 +112,8 @@ impl PatchTree {
                     min: n.min,
                     max: n.max,
                     cone_axis: Vec3::Y,
-                    cone_angle: std::f32::consts::PI,
+                    cone_cos: -1.0,
+                    cone_sin: 0.0,
                 });
             } else {
                 let left = tree.nodes.len() as u32;
@@ -199,27 +190,28 @@ impl PatchTree {
         }
     }
 
-    /// Recomputes every patch's normal cone from `mesh`'s current positions (`O(triangles)`).
-    pub fn update_cones(&mut self, mesh: &TriMesh) {
+    /// Recomputes every patch's normal cone from the triangles' unit normals (`O(triangles)`).
+    pub fn update_cones(&mut self, triangle_normals: &[Vec3]) {
         for patch in &mut self.patches {
-            let normals = patch.triangles.iter().map(|&t| {
-                let [a, b, c] = mesh.triangle(t as usize);
-                (b - a).cross(c - a)
-            });
+            let normals = patch
+                .triangles
+                .iter()
+                .map(|&t| triangle_normals[t as usize]);
             let axis = normals.clone().sum::<Vec3>().normalize_or_zero();
-            let mut angle: f32 = 0.0;
+            // Cosine of the largest angle between the axis and a triangle's normal.
+            let mut cos = 1.0f32;
             if axis == Vec3::ZERO {
-                angle = std::f32::consts::PI;
+                cos = -1.0;
             } else {
                 for n in normals {
-                    let n = n.normalize_or_zero();
                     if n != Vec3::ZERO {
-                        angle = angle.max(axis.dot(n).clamp(-1.0, 1.0).acos());
+                        cos = cos.min(axis.dot(n));
                     }
                 }
             }
             patch.cone_axis = if axis == Vec3::ZERO { Vec3::Y } else { axis };
-            patch.cone_angle = angle;
+            patch.cone_cos = cos.clamp(-1.0, 1.0);
+            patch.cone_sin = (1.0 - patch.cone_cos * patch.cone_cos).max(0.0).sqrt();
         }
     }
 
@@ -228,10 +220,16 @@ impl PatchTree {
     /// Volino and Magnenat-Thalmann for self-collision).
     fn folds(&self, a: u32, b: u32) -> bool {
         let (pa, pb) = (&self.patches[a as usize], &self.patches[b as usize]);
-        // Normals in an open hemisphere cannot meet; exactly opposite sheets (a flat fold)
-        // have a half-angle of exactly 90°.
-        merged_cone(pa.cone_axis, pa.cone_angle, pb.cone_axis, pb.cone_angle)
-            >= std::f32::consts::FRAC_PI_2 - 1e-3
+        // The smallest cone holding both has half-angle max(θa, θb, (θa + θb + φ) / 2), φ the
+        // angle between the axes; it reaches 90° (normals in no open hemisphere; exactly
+        // opposite sheets, a flat fold, are at 90°) when θa or θb does, or when
+        // φ ≥ π − θa − θb, that is cos φ ≤ −cos(θa + θb). Without trigonometry:
+        const SLACK: f32 = 1e-3;
+        if pa.cone_cos <= SLACK || pb.cone_cos <= SLACK {
+            return true;
+        }
+        let cos_sum = pa.cone_cos * pb.cone_cos - pa.cone_sin * pb.cone_sin;
+        pa.cone_axis.dot(pb.cone_axis) <= -cos_sum + SLACK
     }
 
     /// Candidate patch pairs for self-collision whose boxes come within `margin`, each once
@@ -378,7 +376,11 @@ pub(crate) fn random_leaf_pair(
         if rel.is_none() && a == b {
             let l = x.left();
             let mut options = [(l, l), (l + 1, l + 1), (l, l + 1)];
-            let n = if meets(&na[l as usize], &na[l as usize + 1]) { 3 } else { 2 };
+            let n = if meets(&na[l as usize], &na[l as usize + 1]) {
+                3
+            } else {
+                2
+            };
             options.swap(0, rng.random_range(0..n));
             (a, b) = options[0];
             continue;
@@ -425,6 +427,15 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
 
+    fn normals_of(mesh: &TriMesh) -> Vec<Vec3> {
+        (0..mesh.triangle_count())
+            .map(|t| {
+                let [a, b, c] = mesh.triangle(t);
+                (b - a).cross(c - a).normalize_or_zero()
+            })
+            .collect()
+    }
+
     #[test]
     fn patches_partition_the_triangles_and_boxes_contain_them() {
         let mesh = generate::torus(1.0, 0.3, 48, 24);
@@ -443,7 +454,7 @@ mod tests {
         // A closed torus: no two non-adjacent patches of the rest shape overlap much, but
         // far-apart patches never appear as overlapping without their boxes touching.
         let (mut stack, mut out) = (Vec::new(), Vec::new());
-        tree.update_cones(&mesh);
+        tree.update_cones(&normals_of(&mesh));
         tree.self_overlaps(0.0, &mut stack, &mut out);
         for &(a, b) in &out {
             let (pa, pb) = (&tree.patches[a as usize], &tree.patches[b as usize]);
@@ -453,24 +464,35 @@ mod tests {
         // A flat sheet never folds; one folded in half does, where it folds.
         let sheet = generate::cloth_grid(1.0, 1.0, 16, 16);
         let mut tree = PatchTree::new(&sheet, 16);
-        tree.update_cones(&sheet);
-        assert!(tree.patches.iter().all(|p| p.cone_angle < 1e-3));
+        tree.update_cones(&normals_of(&sheet));
+        assert!(tree.patches.iter().all(|p| p.cone_cos > 1.0 - 1e-6));
         out.clear();
         tree.self_overlaps(0.0, &mut stack, &mut out);
-        assert!(out.is_empty(), "a flat sheet has no candidate pairs: {out:?}");
+        assert!(
+            out.is_empty(),
+            "a flat sheet has no candidate pairs: {out:?}"
+        );
         let folded: Vec<Vec3> = sheet
             .positions()
             .iter()
-            .map(|p| if p.x > 0.0 { Vec3::new(-p.x, 0.01, p.z) } else { *p })
+            .map(|p| {
+                if p.x > 0.0 {
+                    Vec3::new(-p.x, 0.01, p.z)
+                } else {
+                    *p
+                }
+            })
             .collect();
         let moved = TriMesh::new(folded, sheet.triangles().to_vec()).unwrap();
         tree.refit(&moved);
-        tree.update_cones(&moved);
+        tree.update_cones(&normals_of(&moved));
         out.clear();
         tree.self_overlaps(0.02, &mut stack, &mut out);
         // The folded half lies over the flat one (far pairs), and the patches at the crease
         // fold (near pairs or a patch with itself).
-        let near = |&(a, b): &(u32, u32)| a == b || tree.patches[a as usize].near.binary_search(&b).is_ok();
+        let near = |&(a, b): &(u32, u32)| {
+            a == b || tree.patches[a as usize].near.binary_search(&b).is_ok()
+        };
         assert!(out.iter().any(near), "{out:?}");
         assert!(out.iter().any(|p| !near(p)), "{out:?}");
     }

@@ -5,9 +5,11 @@ use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::config::Sampling;
-use super::local_search::adjacent;
+use super::local_search::{adjacent, triangles_within_rings};
 use super::patch_tree::{box_transform, random_leaf_pair};
 use super::surface::{Placed, TrackedSurface};
+use crate::geometry::closest_points_triangle_triangle;
+use glam::Vec3;
 
 /// Scratch memory of the samplers, reused across frames.
 #[derive(Debug, Default, Clone)]
@@ -15,6 +17,11 @@ pub(crate) struct SamplerScratch {
     stack: Vec<(u32, u32)>,
     overlaps: Vec<(u32, u32)>,
     covered: std::collections::HashSet<(u32, u32)>,
+    known_triangles: std::collections::HashSet<u32>,
+    sharp: Vec<(f32, u32)>,
+    ring: Vec<u32>,
+    local: Vec<u32>,
+    boxes: Vec<([glam::DVec3; 3], glam::DVec3, glam::DVec3)>,
     cdf_a: Vec<f64>,
     cdf_b: Vec<f64>,
     /// Overlapping patch pairs found this frame.
@@ -24,6 +31,12 @@ pub(crate) struct SamplerScratch {
 /// Fraction of hierarchy-driven samples drawn uniformly instead (contacts between adjacent
 /// patches, which the hierarchy skips in self-collision).
 const UNIFORM_SHARE: f64 = 0.25;
+
+/// One sample in this many is spent on a crease probe (self-collision).
+const CREASE_SHARE: usize = 4;
+
+/// Edges whose two triangles' normals have a cosine below this are folded sharply (past 120°).
+const CREASE_COS: f32 = -0.5;
 
 /// Candidate patch pairs tried per sample: a random descent below a pair can dead-end (its
 /// subtrees are apart at a finer level), and then another pair is drawn.
@@ -36,6 +49,8 @@ pub(crate) fn draw(
     a: &Placed,
     b: &Placed,
     self_mode: bool,
+    exclusion_rings: u32,
+    thickness: f32,
     margin: f32,
     known: impl Iterator<Item = (u32, u32)>,
     rng: &mut Xoshiro256PlusPlus,
@@ -72,7 +87,9 @@ pub(crate) fn draw(
         Sampling::Hierarchy => {
             scratch.overlaps.clear();
             if self_mode {
-                a.surface.patches.self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
+                a.surface
+                    .patches
+                    .self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
             } else if let Some(rel) = &b.pose {
                 a.surface.patches.pair_overlaps(
                     &b.surface.patches,
@@ -83,15 +100,20 @@ pub(crate) fn draw(
                 );
             }
             scratch.overlap_count = scratch.overlaps.len();
-            // Patch pairs that already hold a tracked pair or a contact are followed by it (and
-            // by propagation): new samples go where nothing is known yet.
+            // Patch pairs that already hold a contact are followed by its pair and by
+            // propagation: new samples go where no contact is known yet.
             scratch.covered.clear();
+            scratch.known_triangles.clear();
             let (of_a, of_b) = (&a.surface.patches.patch_of, &b.surface.patches.patch_of);
             for (ta, tb) in known {
+                scratch.known_triangles.insert(ta);
+                scratch.known_triangles.insert(tb);
                 let (x, y) = (of_a[ta as usize], of_b[tb as usize]);
-                scratch
-                    .covered
-                    .insert(if self_mode { (x.min(y), x.max(y)) } else { (x, y) });
+                scratch.covered.insert(if self_mode {
+                    (x.min(y), x.max(y))
+                } else {
+                    (x, y)
+                });
             }
             if !scratch.covered.is_empty() {
                 let covered = &scratch.covered;
@@ -108,9 +130,22 @@ pub(crate) fn draw(
                 // come within the margin: contacts elsewhere are impossible.
                 return;
             }
+            let mut budget = n - uniform_n;
+            if self_mode {
+                budget -= crease_probes(
+                    n / CREASE_SHARE,
+                    a,
+                    exclusion_rings,
+                    thickness,
+                    rng,
+                    scratch,
+                    out,
+                )
+                .min(budget);
+            }
             let xf = b.pose.as_ref().map(box_transform);
             let (bvh_a, bvh_b) = (&a.surface.patches.bvh, &b.surface.patches.bvh);
-            for _ in 0..n - uniform_n {
+            for _ in 0..budget {
                 for _ in 0..DESCENT_TRIES {
                     let (pa, pb) = scratch.overlaps[rng.random_range(0..scratch.overlaps.len())];
                     let na = a.surface.patches.patches[pa as usize].node;
@@ -124,7 +159,8 @@ pub(crate) fn draw(
                         bvh_a.triangles_of(&bvh_a.nodes()[la as usize]),
                         bvh_b.triangles_of(&bvh_b.nodes()[lb as usize]),
                     );
-                    if let Some(pair) = pick_in_leaves(ts_a, ts_b, a, b, self_mode, rng) {
+                    let exclusion = self_mode.then_some(exclusion_rings);
+                    if let Some(pair) = best_in_leaves(ts_a, ts_b, a, b, exclusion, rng) {
                         out.push(pair);
                         break;
                     }
@@ -134,25 +170,147 @@ pub(crate) fn draw(
     }
 }
 
-/// A random pair of triangles from two leaves (not adjacent in self-collision), if any.
-fn pick_in_leaves(
+/// The closest pair of triangles of two leaves (not excluded in self-collision), if any: a
+/// start on the right side of a fold, where a random pick would often start on the same side
+/// and slide. Ties keep the first in a random order.
+fn best_in_leaves(
     ts_a: &[u32],
     ts_b: &[u32],
     a: &Placed,
     b: &Placed,
-    self_mode: bool,
+    exclusion: Option<u32>,
     rng: &mut Xoshiro256PlusPlus,
 ) -> Option<(u32, u32)> {
-    let (oa, ob) = (rng.random_range(0..ts_a.len()), rng.random_range(0..ts_b.len()));
+    let (oa, ob) = (
+        rng.random_range(0..ts_a.len()),
+        rng.random_range(0..ts_b.len()),
+    );
+    let mut best: Option<(f64, u32, u32)> = None;
     for i in 0..ts_a.len() {
+        let ta = ts_a[(oa + i) % ts_a.len()];
+        let tri_a = a.triangle(ta);
+        let (lo_a, hi_a) = (
+            tri_a[0].min(tri_a[1]).min(tri_a[2]),
+            tri_a[0].max(tri_a[1]).max(tri_a[2]),
+        );
         for j in 0..ts_b.len() {
-            let (ta, tb) = (ts_a[(oa + i) % ts_a.len()], ts_b[(ob + j) % ts_b.len()]);
-            if !self_mode || (ta != tb && !adjacent(a.corners(ta), b.corners(tb))) {
-                return Some((ta, tb));
+            let tb = ts_b[(ob + j) % ts_b.len()];
+            if let Some(rings) = exclusion
+                && (ta == tb
+                    || triangles_within_rings(a.topology(), a.corners(ta), b.corners(tb), rings))
+            {
+                continue;
+            }
+            let tri_b = b.triangle(tb);
+            let (lo_b, hi_b) = (
+                tri_b[0].min(tri_b[1]).min(tri_b[2]),
+                tri_b[0].max(tri_b[1]).max(tri_b[2]),
+            );
+            let gap = (lo_a - hi_b)
+                .max(lo_b - hi_a)
+                .max(glam::DVec3::ZERO)
+                .length();
+            if best.is_some_and(|(d, _, _)| gap >= d) {
+                continue;
+            }
+            let d = closest_points_triangle_triangle(&tri_a, &tri_b).distance;
+            if best.is_none_or(|(e, _, _)| d < e) {
+                best = Some((d, ta, tb));
             }
         }
     }
-    None
+    best.map(|(_, ta, tb)| (ta, tb))
+}
+
+/// Crease probes (self-collision): around the `count` sharpest folded edges (dihedral fold
+/// past 120°) that no known contact touches, every pair of triangles within two vertex rings
+/// of the edge, facing each other (normals past 120° apart) and closer than the thickness,
+/// becomes a start. A surface folding onto
+/// itself first touches just beyond the excluded zone, next to a sharp edge, where random
+/// starts mostly slide along the sheet. Returns the number of probes made.
+#[allow(clippy::too_many_arguments)]
+fn crease_probes(
+    count: usize,
+    a: &Placed,
+    exclusion_rings: u32,
+    thickness: f32,
+    rng: &mut Xoshiro256PlusPlus,
+    scratch: &mut SamplerScratch,
+    out: &mut Vec<(u32, u32)>,
+) -> usize {
+    let topo = a.topology();
+    let normals = &a.surface.normals;
+    let known = &scratch.known_triangles;
+    scratch.sharp.clear();
+    for (e, edge) in topo.edges().iter().enumerate() {
+        if let [t0, t1, ..] = edge.triangles[..] {
+            let c = normals[t0 as usize].dot(normals[t1 as usize]);
+            if c < CREASE_COS
+                && normals[t0 as usize] != Vec3::ZERO
+                && normals[t1 as usize] != Vec3::ZERO
+                && !known.contains(&t0)
+                && !known.contains(&t1)
+            {
+                scratch.sharp.push((c, e as u32));
+            }
+        }
+    }
+    let sharpest = |x: &(f32, u32), y: &(f32, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+    if scratch.sharp.len() > count {
+        scratch.sharp.select_nth_unstable_by(count, sharpest);
+        scratch.sharp.truncate(count);
+    }
+    scratch.sharp.sort_unstable_by(sharpest);
+    let h = thickness.max(0.0) as f64;
+    let probes = scratch.sharp.len();
+    for i in 0..probes {
+        let [v0, v1] = topo.edge(scratch.sharp[i].1).vertices;
+        // Triangles within two rings of the edge.
+        scratch.ring.clear();
+        scratch.ring.extend([v0, v1]);
+        let mut start = 0;
+        for _ in 0..2 {
+            let end = scratch.ring.len();
+            for k in start..end {
+                for &w in topo.vertex_neighbours(scratch.ring[k]) {
+                    if !scratch.ring.contains(&w) {
+                        scratch.ring.push(w);
+                    }
+                }
+            }
+            start = end;
+        }
+        scratch.local.clear();
+        for &v in &scratch.ring {
+            scratch.local.extend_from_slice(topo.vertex_triangles(v));
+        }
+        scratch.local.sort_unstable();
+        scratch.local.dedup();
+        scratch.boxes.clear();
+        scratch.boxes.extend(scratch.local.iter().map(|&t| {
+            let x = a.triangle(t);
+            (x, x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
+        }));
+        for (k, &(x, lo_x, hi_x)) in scratch.boxes.iter().enumerate() {
+            for (j, &(y, lo_y, hi_y)) in scratch.boxes.iter().enumerate().skip(k + 1) {
+                if (lo_x - hi_y).max(lo_y - hi_x).max_element() > h {
+                    continue;
+                }
+                let (t, u) = (scratch.local[k], scratch.local[j]);
+                // The two sides of a fold face each other.
+                if normals[t as usize].dot(normals[u as usize]) >= CREASE_COS
+                    || triangles_within_rings(topo, a.corners(t), a.corners(u), exclusion_rings)
+                {
+                    continue;
+                }
+                if closest_points_triangle_triangle(&x, &y).distance <= h {
+                    out.push((t, u));
+                }
+            }
+        }
+    }
+    let _ = rng;
+    probes
 }
 
 fn uniform(

@@ -7,7 +7,7 @@ use crate::geometry::PoseF64;
 use crate::mesh::{MeshError, Topology, TriMesh};
 
 /// Default largest number of triangles in a patch of the incomplete hierarchy.
-pub const DEFAULT_PATCH_SIZE: u32 = 32;
+pub const DEFAULT_PATCH_SIZE: u32 = 64;
 
 /// A triangle mesh prepared for stochastic tracking: its [`Topology`] (feature neighbours),
 /// a table for sampling points uniformly over its area, the previous frame's positions (for
@@ -23,6 +23,8 @@ pub struct TrackedSurface {
     previous: Vec<Vec3>,
     area_cdf: Vec<f64>,
     pub(crate) patches: PatchTree,
+    /// Unit normal of each triangle at the current positions (zero when degenerate).
+    pub(crate) normals: Vec<Vec3>,
     mean_edge: f32,
     size: f32,
 }
@@ -56,13 +58,16 @@ impl TrackedSurface {
             area_cdf.push(total);
         }
         let mut patches = PatchTree::new(&mesh, patch_size);
-        patches.update_cones(&mesh);
+        let mut normals = Vec::new();
+        triangle_normals(&mesh, &mut normals);
+        patches.update_cones(&normals);
         TrackedSurface {
             previous: mesh.positions().to_vec(),
             mesh,
             topology,
             area_cdf,
             patches,
+            normals,
             mean_edge,
             size,
         }
@@ -79,7 +84,8 @@ impl TrackedSurface {
             return Err(e);
         }
         self.patches.refit(&self.mesh);
-        self.patches.update_cones(&self.mesh);
+        triangle_normals(&self.mesh, &mut self.normals);
+        self.patches.update_cones(&self.normals);
         Ok(())
     }
 
@@ -124,6 +130,15 @@ impl TrackedSurface {
             .partition_point(|&c| c <= x)
             .min(self.area_cdf.len() - 1) as u32
     }
+}
+
+/// Unit normals of `mesh`'s triangles (zero for degenerate ones), written to `out`.
+fn triangle_normals(mesh: &TriMesh, out: &mut Vec<Vec3>) {
+    out.clear();
+    out.extend((0..mesh.triangle_count()).map(|t| {
+        let [a, b, c] = mesh.triangle(t);
+        (b - a).cross(c - a).normalize_or_zero()
+    }));
 }
 
 /// A surface seen from a frame: its own (`pose == None`) or another mesh's.

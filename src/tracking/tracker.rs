@@ -14,7 +14,11 @@ use super::local_search::{Located, SearchCounters, Searcher};
 use super::pruning::{PruneCounts, PruneScratch, prune};
 use super::sampling::{SamplerScratch, draw};
 use super::surface::{Placed, TrackedSurface};
-use crate::geometry::Pose;
+use crate::geometry::{ClosestPoints, Pose};
+
+/// Sliding self pairs within this many mean edge lengths keep descending (see
+/// `Searcher::slide_limit`).
+const SLIDE_LIMIT_EDGES: f64 = 2.0;
 
 /// A tracked pair of locally closest features, persistent across frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -207,6 +211,10 @@ impl Tracker {
 
     fn step(&mut self, a: Placed, b: Placed, self_mode: bool, size: f32) {
         let cfg = &self.config;
+        let mean_edge = a
+            .surface
+            .mean_edge_length()
+            .max(b.surface.mean_edge_length()) as f64;
         let mut stats = StepStats::default();
         let searcher = Searcher {
             a,
@@ -217,6 +225,7 @@ impl Tracker {
             epsilon: 1e-9 * size as f64,
             thickness: cfg.thickness.max(0.0) as f64,
             exclusion_rings: cfg.exclusion_rings,
+            slide_limit: SLIDE_LIMIT_EDGES * mean_edge,
         };
         let s = &mut self.scratch;
         let frame = self.frame;
@@ -233,11 +242,10 @@ impl Tracker {
             &a,
             &b,
             self_mode,
+            cfg.exclusion_rings,
+            cfg.thickness,
             margin,
-            self.pairs
-                .iter()
-                .map(|p| (p.triangle_a, p.triangle_b))
-                .chain(self.contacts.iter().map(|c| (c.triangle_a, c.triangle_b))),
+            self.contacts.iter().map(|c| (c.triangle_a, c.triangle_b)),
             &mut rng,
             &mut s.sampler,
             &mut s.starts,
@@ -293,7 +301,17 @@ impl Tracker {
         let thickness = cfg.thickness.max(0.0) as f64;
         for p in &self.pairs {
             if p.distance <= thickness {
-                let l = searcher.locate(p.triangle_a, p.triangle_b, &mut counters);
+                let l = Located {
+                    ta: p.triangle_a,
+                    tb: p.triangle_b,
+                    cp: ClosestPoints {
+                        distance: p.distance,
+                        point_a: p.point_a,
+                        point_b: p.point_b,
+                    },
+                    fa: p.feature_a,
+                    fb: p.feature_b,
+                };
                 self.contacts
                     .push(Contact::new(&a, &b, &l, cfg.thickness, false));
                 let key = key(self_mode, p.triangle_a, p.triangle_b);
@@ -392,92 +410,4 @@ fn mix(seed: u64, frame: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
-}
-
-#[cfg(test)]
-mod diagnose {
-    use super::*;
-    use crate::bvh::{CollisionMesh, QueryWorkspace, self_contacts};
-    use crate::deform::Whirl;
-    use crate::mesh::TriMesh;
-    use crate::tracking::local_search::triangles_within_rings;
-
-    #[test]
-    #[ignore]
-    fn diagnose_colon() {
-        let m = TriMesh::from_obj("../shared/assets/meshes/large-intestine-sf+-hf-.obj").unwrap();
-        let whirl = Whirl::new(&m, 120, 1);
-        let mut surface = TrackedSurface::new(m.clone());
-        let cfg = TrackerConfig::for_surface(&surface);
-        let frame: usize = std::env::var("F").map(|v| v.parse().unwrap()).unwrap_or(20);
-        let mut p = Vec::new();
-        whirl.positions(frame, &mut p);
-        surface.set_positions(&p).unwrap();
-        let mut cm = CollisionMesh::new(m.clone());
-        cm.set_positions(&p).unwrap();
-        let mut out = Vec::new();
-        self_contacts(&cm, cfg.thickness, &mut QueryWorkspace::new(), &mut out);
-        let topo = surface.topology();
-        out.retain(|c| !triangles_within_rings(topo, m.triangles()[c.pair.a as usize], m.triangles()[c.pair.b as usize], 1));
-        let mut patch_of = vec![0u32; m.triangle_count()];
-        for (i, pa) in surface.patches.patches.iter().enumerate() {
-            for &t in &pa.triangles { patch_of[t as usize] = i as u32; }
-        }
-        let (mut stack, mut ov) = (Vec::new(), Vec::new());
-        let margin = cfg.thickness + cfg.far_epsilon * surface.size();
-        surface.patches.self_overlaps(margin, &mut stack, &mut ov);
-        let ovs: std::collections::HashSet<(u32, u32)> = ov.iter().copied().collect();
-        let covered = out.iter().filter(|c| {
-            let (x, y) = (patch_of[c.pair.a as usize], patch_of[c.pair.b as usize]);
-            ovs.contains(&(x.min(y), x.max(y)))
-        }).count();
-        println!("frame {frame}: {} exact pairs, {} overlaps, {} exact pairs inside candidate patch pairs", out.len(), ov.len(), covered);
-        let with: std::collections::HashSet<(u32, u32)> = out.iter().map(|c| {
-            let (x, y) = (patch_of[c.pair.a as usize], patch_of[c.pair.b as usize]);
-            (x.min(y), x.max(y))
-        }).collect();
-        let weight = |&(a, b): &(u32, u32)| {
-            let (pa, pb) = (&surface.patches.patches[a as usize], &surface.patches.patches[b as usize]);
-            let m = margin;
-            let lo = (pa.min - m).max(pb.min - m);
-            let hi = (pa.max + m).min(pb.max + m);
-            let ov = (hi - lo).max(glam::Vec3::ZERO);
-            let va = (pa.max - pa.min + 2.0 * m).element_product();
-            let vb = (pb.max - pb.min + 2.0 * m).element_product();
-            ov.element_product() / va.min(vb)
-        };
-        let (mut wc, mut nc, mut wn, mut nn) = (0.0, 0, 0.0, 0);
-        for o in &ov { if with.contains(o) { wc += weight(o); nc += 1 } else { wn += weight(o); nn += 1 } }
-        println!("  candidates with contact: {nc} (mean overlap ratio {:.3}); without: {nn} (mean {:.3})", wc / nc.max(1) as f32, wn / nn.max(1) as f32);
-        // Searches started at exact contacts shifted by a few rings.
-        let searcher = Searcher { a: Placed { surface: &surface, pose: None }, b: Placed { surface: &surface, pose: None }, self_mode: true, mode: cfg.search, max_iterations: 16, epsilon: 1e-9 * surface.size() as f64, thickness: cfg.thickness as f64, exclusion_rings: 1 };
-        let mut counters = SearchCounters::default();
-        let (mut ok, mut slid, mut stuck) = (0, 0, 0);
-        for c in out.iter().step_by((out.len() / 200).max(1)) {
-            // Walk 3 triangle steps away on side a.
-            let mut ta = c.pair.a;
-            for k in 0..3 { ta = topo.triangle_neighbours(ta)[k % topo.triangle_neighbours(ta).len()]; }
-            if searcher.excluded(ta, c.pair.b) { continue; }
-            let start = searcher.locate(ta, c.pair.b, &mut counters);
-            let (l, s) = searcher.descend(start, &mut counters);
-            if s || searcher.sliding(&l) { slid += 1 } else if l.cp.distance <= cfg.thickness as f64 { ok += 1 } else { stuck += 1; }
-        }
-        println!("from 3 steps away: {ok} reach contact, {slid} sliding, {stuck} stuck at a farther local minimum");
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(5);
-        let mut scratch = SamplerScratch::default();
-        let mut starts = Vec::new();
-        let placed = Placed { surface: &surface, pose: None };
-        draw(crate::tracking::Sampling::Hierarchy, 400, &placed, &placed, true, margin, std::iter::empty(), &mut rng, &mut scratch, &mut starts);
-        let (mut ok, mut slid, mut stuck, mut excl) = (0, 0, 0, 0);
-        let mut hit_tris = std::collections::HashSet::new();
-        let mut start_close = 0;
-        for &(ta, tb) in &starts {
-            if searcher.excluded(ta, tb) { excl += 1; continue; }
-            let start = searcher.locate(ta, tb, &mut counters);
-            if start.cp.distance <= cfg.thickness as f64 { start_close += 1; }
-            let (l, s) = searcher.descend(start, &mut counters);
-            if s || searcher.sliding(&l) { slid += 1 } else if l.cp.distance <= cfg.thickness as f64 { ok += 1; hit_tris.insert(l.ta.min(l.tb)); } else { stuck += 1; }
-        }
-        println!("400 hierarchy samples: {} drawn, {excl} excluded, {start_close} start in contact, {ok} reach contact ({} distinct), {slid} sliding, {stuck} stuck", starts.len(), hit_tris.len());
-    }
 }
