@@ -46,15 +46,26 @@ pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rin
             .iter()
             .any(|&v| topology.vertex_neighbours(v).iter().any(|w| b.contains(w))),
         2 => {
-            // Within two steps: a vertex next to (or of) `a` is next to (or of) `b`.
-            let mut near_b: SmallVec<[u32; 32]> = SmallVec::from_slice(&b);
-            for &v in &b {
-                near_b.extend_from_slice(topology.vertex_neighbours(v));
-            }
-            near_b.sort_unstable();
-            let hit = |w: &u32| near_b.binary_search(w).is_ok();
-            a.iter()
-                .any(|&v| hit(&v) || topology.vertex_neighbours(v).iter().any(hit))
+            // Within two steps: some vertex of `a` and some vertex of `b` are neighbours or
+            // share a neighbour (a merge of two ascending lists).
+            a.iter().any(|&v| {
+                let nv = topology.vertex_neighbours(v);
+                b.iter().any(|&u| {
+                    let nu = topology.vertex_neighbours(u);
+                    if nv.binary_search(&u).is_ok() {
+                        return true;
+                    }
+                    let (mut i, mut j) = (0, 0);
+                    while i < nv.len() && j < nu.len() {
+                        match nv[i].cmp(&nu[j]) {
+                            std::cmp::Ordering::Less => i += 1,
+                            std::cmp::Ordering::Greater => j += 1,
+                            std::cmp::Ordering::Equal => return true,
+                        }
+                    }
+                    false
+                })
+            })
         }
         _ => {
             let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);

@@ -18,7 +18,9 @@ pub(crate) struct SamplerScratch {
     overlaps: Vec<(u32, u32)>,
     covered: std::collections::HashSet<(u32, u32)>,
     known_triangles: std::collections::HashSet<u32>,
-    sharp: Vec<(f32, u32)>,
+    near_known: Vec<bool>,
+    /// Crease probe candidates: (sharpness key, edge, collapsed rather than folded).
+    sharp: Vec<(f32, u32, bool)>,
     ring: Vec<u32>,
     local: Vec<u32>,
     boxes: Vec<([glam::DVec3; 3], glam::DVec3, glam::DVec3)>,
@@ -33,9 +35,16 @@ pub(crate) struct SamplerScratch {
 const UNIFORM_SHARE: f64 = 0.25;
 
 /// One sample in this many is spent on a crease probe (self-collision).
-const CREASE_SHARE: usize = 4;
+const CREASE_SHARE: usize = 2;
 
-/// Edges whose two triangles' normals have a cosine below this are folded sharply (past 120°).
+/// Edges shorter than this fraction of their rest length are collapsed: crease probe
+/// candidates, like edges folded past 90°.
+const COLLAPSED: f32 = 0.3;
+
+/// Crease probes go to random edges among this many times as many of the sharpest.
+const PROBE_POOL: usize = 4;
+
+/// Triangles on the two sides of a crease face each other: normals past 120° apart.
 const CREASE_COS: f32 = -0.5;
 
 /// Candidate patch pairs tried per sample: a random descent below a pair can dead-end (its
@@ -222,8 +231,9 @@ fn best_in_leaves(
     best.map(|(_, ta, tb)| (ta, tb))
 }
 
-/// Crease probes (self-collision): around the `count` sharpest folded edges (dihedral fold
-/// past 120°) that no known contact touches, every pair of triangles within two vertex rings
+/// Crease probes (self-collision): around `count` edges drawn among the sharpest folded ones
+/// (dihedral fold past 90°) or most collapsed ones (shorter than 30 % of their rest length)
+/// that are not next to a known contact, every pair of triangles within two vertex rings
 /// of the edge, facing each other (normals past 120° apart) and closer than the thickness,
 /// becomes a start. A surface folding onto
 /// itself first touches just beyond the excluded zone, next to a sharp edge, where random
@@ -240,31 +250,62 @@ fn crease_probes(
 ) -> usize {
     let topo = a.topology();
     let normals = &a.surface.normals;
-    let known = &scratch.known_triangles;
-    scratch.sharp.clear();
-    for (e, edge) in topo.edges().iter().enumerate() {
-        if let [t0, t1, ..] = edge.triangles[..] {
-            let c = normals[t0 as usize].dot(normals[t1 as usize]);
-            if c < CREASE_COS
-                && normals[t0 as usize] != Vec3::ZERO
-                && normals[t1 as usize] != Vec3::ZERO
-                && !known.contains(&t0)
-                && !known.contains(&t1)
-            {
-                scratch.sharp.push((c, e as u32));
+    // Vertices within a ring of a known contact: creases there are being followed.
+    scratch.near_known.clear();
+    scratch.near_known.resize(topo.vertex_count(), false);
+    for &t in &scratch.known_triangles {
+        for v in a.corners(t) {
+            scratch.near_known[v as usize] = true;
+            for &w in topo.vertex_neighbours(v) {
+                scratch.near_known[w as usize] = true;
             }
         }
     }
-    let sharpest = |x: &(f32, u32), y: &(f32, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
-    if scratch.sharp.len() > count {
-        scratch.sharp.select_nth_unstable_by(count, sharpest);
-        scratch.sharp.truncate(count);
+    scratch.sharp.clear();
+    for (e, edge) in topo.edges().iter().enumerate() {
+        if let [t0, t1, ..] = edge.triangles[..] {
+            let [v0, v1] = edge.vertices;
+            // Folded: the normals' cosine. Collapsed (squeezed along the surface): the
+            // remaining fraction of the rest length, mapped to [-1, 0) below `COLLAPSED`.
+            let fold = if normals[t0 as usize] != Vec3::ZERO && normals[t1 as usize] != Vec3::ZERO {
+                normals[t0 as usize].dot(normals[t1 as usize])
+            } else {
+                1.0
+            };
+            let rest = a.surface.rest_edge_lengths[e];
+            let now = (a.surface.mesh().positions()[v0 as usize]
+                - a.surface.mesh().positions()[v1 as usize])
+                .length();
+            let collapse = if rest > 0.0 {
+                now / rest / COLLAPSED - 1.0
+            } else {
+                1.0
+            };
+            let c = fold.min(collapse);
+            if c < 0.0 && !scratch.near_known[v0 as usize] && !scratch.near_known[v1 as usize] {
+                scratch.sharp.push((c, e as u32, collapse < fold));
+            }
+        }
+    }
+    // `count` edges drawn at random among the `PROBE_POOL · count` sharpest.
+    let sharpest =
+        |x: &(f32, u32, bool), y: &(f32, u32, bool)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+    let pool = count.saturating_mul(PROBE_POOL);
+    if scratch.sharp.len() > pool {
+        scratch.sharp.select_nth_unstable_by(pool, sharpest);
+        scratch.sharp.truncate(pool);
     }
     scratch.sharp.sort_unstable_by(sharpest);
+    for i in 0..count.min(scratch.sharp.len()) {
+        let j = rng.random_range(i..scratch.sharp.len());
+        scratch.sharp.swap(i, j);
+    }
+    scratch.sharp.truncate(count);
     let h = thickness.max(0.0) as f64;
     let probes = scratch.sharp.len();
     for i in 0..probes {
-        let [v0, v1] = topo.edge(scratch.sharp[i].1).vertices;
+        let (_, edge, collapsed) = scratch.sharp[i];
+        let [v0, v1] = topo.edge(edge).vertices;
         // Triangles within two rings of the edge.
         scratch.ring.clear();
         scratch.ring.extend([v0, v1]);
@@ -292,13 +333,15 @@ fn crease_probes(
             (x, x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
         }));
         for (k, &(x, lo_x, hi_x)) in scratch.boxes.iter().enumerate() {
+            let (t, n_t) = (scratch.local[k], normals[scratch.local[k] as usize]);
             for (j, &(y, lo_y, hi_y)) in scratch.boxes.iter().enumerate().skip(k + 1) {
-                if (lo_x - hi_y).max(lo_y - hi_x).max_element() > h {
+                let u = scratch.local[j];
+                // The two sides of a fold face each other (a squeezed sheet meets itself
+                // edge-on or flat, in any orientation).
+                if !collapsed && n_t.dot(normals[u as usize]) >= CREASE_COS {
                     continue;
                 }
-                let (t, u) = (scratch.local[k], scratch.local[j]);
-                // The two sides of a fold face each other.
-                if normals[t as usize].dot(normals[u as usize]) >= CREASE_COS
+                if (lo_x - hi_y).max(lo_y - hi_x).max_element() > h
                     || triangles_within_rings(topo, a.corners(t), a.corners(u), exclusion_rings)
                 {
                     continue;
@@ -309,7 +352,6 @@ fn crease_probes(
             }
         }
     }
-    let _ = rng;
     probes
 }
 

@@ -25,6 +25,8 @@ pub struct TrackedSurface {
     pub(crate) patches: PatchTree,
     /// Unit normal of each triangle at the current positions (zero when degenerate).
     pub(crate) normals: Vec<Vec3>,
+    /// Length of each topology edge as built.
+    pub(crate) rest_edge_lengths: Vec<f32>,
     mean_edge: f32,
     size: f32,
 }
@@ -50,6 +52,10 @@ impl TrackedSurface {
             (sum / edges.len() as f64) as f32
         };
         let size = mesh.aabb().extents().length();
+        let rest_edge_lengths = edges
+            .iter()
+            .map(|e| (p[e.vertices[0] as usize] - p[e.vertices[1] as usize]).length())
+            .collect();
         let mut area_cdf = Vec::with_capacity(mesh.triangle_count());
         let mut total = 0.0f64;
         for t in 0..mesh.triangle_count() {
@@ -68,6 +74,7 @@ impl TrackedSurface {
             area_cdf,
             patches,
             normals,
+            rest_edge_lengths,
             mean_edge,
             size,
         }
