@@ -1,15 +1,16 @@
 //! Input at the edges of the number line: poses that are not finite (NaN or infinite parts, a
 //! rotation that cannot be normalised) and finite poses so large that `f32` intermediate
-//! products overflow. Every query answers without NaN: a non-finite pose places its mesh
-//! nowhere (no collision, no distance, probability 0), a huge finite pose is answered
-//! correctly (far apart: no collision, and ADB agrees).
-use glam::{Quat, Vec3};
+//! products overflow; triangles with NaN or infinite corners, or with corners so large that
+//! the `f64` orientations overflow. Every query answers without NaN: a non-finite pose places
+//! its mesh nowhere (no collision, no distance, probability 0) and a non-finite triangle is no
+//! point set; huge finite input is answered correctly.
+use glam::{DVec3, Quat, Vec3};
 use stochastic_collision::adb::{AdbQuery, AdbTree, AdbWorkspace, Budget, adb_intersects};
 use stochastic_collision::bvh::{
     CollisionMesh, ExactOptions, QueryWorkspace, closest_points, intersecting_pairs, intersects,
     intersects_with, root_boxes_overlap,
 };
-use stochastic_collision::geometry::Pose;
+use stochastic_collision::geometry::{Pose, closest_points_triangle_triangle, triangles_intersect};
 use stochastic_collision::mesh::generate;
 
 fn non_finite_poses() -> Vec<Pose> {
@@ -126,4 +127,102 @@ fn huge_finite_translations_are_answered_correctly() {
         ..AdbQuery::default()
     };
     assert!(adb_intersects(&tree, &base, &tree, &near, &exact, &mut adb_ws).collides);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The primitives.
+
+/// A NaN or infinite corner makes a triangle no point set: disjoint from everything, at
+/// distance `+∞`, in both orders.
+#[test]
+fn triangles_with_a_non_finite_corner_are_disjoint_from_everything() {
+    let a = [DVec3::ZERO, DVec3::X, DVec3::Y];
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for corner in 0..3 {
+            for axis in 0..3 {
+                let mut b = [
+                    DVec3::new(0.1, 0.1, -1.0),
+                    DVec3::new(0.2, 0.1, 1.0),
+                    DVec3::ZERO,
+                ];
+                b[corner][axis] = bad;
+                for (x, y) in [(&a, &b), (&b, &a)] {
+                    assert!(!triangles_intersect(x, y), "{x:?} {y:?}");
+                    let c = closest_points_triangle_triangle(x, y);
+                    assert_eq!(c.distance, f64::INFINITY, "{x:?} {y:?}");
+                }
+            }
+        }
+        // Even against an identical copy of itself.
+        let point = [DVec3::splat(bad); 3];
+        assert!(!triangles_intersect(&point, &point));
+    }
+}
+
+/// Finite corners so large that the orientations overflow `f64` are rescaled exactly: the
+/// answers equal the unscaled ones (touching, crossing, a hair apart).
+#[test]
+fn huge_f64_corners_are_decided_exactly() {
+    let h = 2f64.powi(-20);
+    let a = [
+        DVec3::ZERO,
+        DVec3::new(4.0, 0.0, 0.0),
+        DVec3::new(0.0, 4.0, 0.0),
+    ];
+    let cases = [
+        (
+            [
+                DVec3::new(1.0, 1.0, -1.0),
+                DVec3::new(1.0, 1.0, 1.0),
+                DVec3::new(9.0, 9.0, 0.0),
+            ],
+            true,
+        ),
+        (
+            [
+                DVec3::new(1.0, 1.0, 0.0),
+                DVec3::new(1.0, 1.0, 2.0),
+                DVec3::new(3.0, 0.0, 2.0),
+            ],
+            true,
+        ),
+        (
+            [
+                DVec3::new(1.0, 1.0, h),
+                DVec3::new(1.0, 1.0, 2.0),
+                DVec3::new(3.0, 0.0, 2.0),
+            ],
+            false,
+        ),
+        (
+            [
+                DVec3::new(2.0 + h, 2.0, 0.0),
+                DVec3::new(6.0, 2.0, 0.0),
+                DVec3::new(6.0, 6.0, 0.0),
+            ],
+            false,
+        ),
+        (
+            [
+                DVec3::new(2.0, 2.0, 0.0),
+                DVec3::new(6.0, 2.0, 0.0),
+                DVec3::new(6.0, 6.0, 0.0),
+            ],
+            true,
+        ),
+    ];
+    for (b, hit) in cases {
+        for e in [0, 100, 300, 600, 900, 1000] {
+            let k = 2f64.powi(e);
+            let (x, y) = (a.map(|p| p * k), b.map(|p| p * k));
+            assert_eq!(triangles_intersect(&x, &y), hit, "{b:?} scaled by 2^{e}");
+            assert_eq!(
+                triangles_intersect(&y, &x),
+                hit,
+                "{b:?} scaled by 2^{e}, swapped"
+            );
+            let c = closest_points_triangle_triangle(&x, &y);
+            assert!(!c.distance.is_nan(), "{b:?} scaled by 2^{e}: {c:?}");
+        }
+    }
 }
