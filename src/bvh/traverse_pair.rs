@@ -34,8 +34,8 @@ pub struct ExactOutcome {
 }
 
 /// Whether the surfaces of `a` at `pose_a` and `b` at `pose_b` touch or intersect: exact, stops
-/// at the first intersecting triangle pair. `false` when a pose is not
-/// [finite](Pose::is_finite) (that mesh is nowhere); so for every query of this module.
+/// at the first intersecting triangle pair. A pose that is not [finite](Pose::is_finite) places
+/// its mesh nowhere: `false` (and likewise no pairs, no containment for the other queries here).
 ///
 /// # Example
 /// ```
