@@ -579,6 +579,10 @@ fn plot(
         .iter()
         .flat_map(|s| s.1.iter().map(|p| p.0))
         .fold(1.0, f64::max);
+    let xmin = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.0))
+        .fold(xmax, f64::min);
     let ymax = series
         .iter()
         .flat_map(|s| s.1.iter().map(|p| p.1))
@@ -588,10 +592,12 @@ fn plot(
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
-        .build_cartesian_2d((1.0f64..xmax * 1.5).log_scale(), 0.0f64..ymax * 1.15)?;
+        .build_cartesian_2d((xmin / 1.5..xmax * 1.5).log_scale(), 0.0f64..ymax * 1.15)?;
     chart
         .configure_mesh()
         .x_desc("new pairs per frame (log)")
+        .x_labels(12)
+        .x_label_formatter(&|x| format!("{x:.0}"))
         .y_desc(y_desc)
         .draw()?;
     for (label, pts, color) in series {
@@ -755,6 +761,8 @@ fn main() {
     let false_rate = curve(|r| r.false_contact_rate);
     let tracker_t = curve(|r| r.tracker_us / 1000.0);
     let exact_t = curve(|r| r.exact_us / 1000.0);
+    let budget_t = curve(|r| 0.2 * r.exact_us / 1000.0);
+    let recall_target = curve(|_| 0.95);
     let title = format!(
         "{}: {} triangles",
         name.rsplit('/').next().unwrap_or(&name),
@@ -768,15 +776,17 @@ fn main() {
             &[
                 ("recall", recall, RGBColor(31, 119, 180)),
                 ("false contact rate", false_rate, RGBColor(214, 39, 40)),
+                ("target recall 0.95", recall_target, RGBColor(150, 150, 150)),
             ],
         ),
         plot(
             &settings.out_dir.join("time_vs_pairs.svg"),
             &format!("Time per frame — {title}"),
-            "ms per frame",
+            "ms per frame (thread CPU time)",
             &[
                 ("tracker", tracker_t, RGBColor(31, 119, 180)),
                 ("exact self pass", exact_t, RGBColor(44, 160, 44)),
+                ("target: 0.2 × exact", budget_t, RGBColor(150, 150, 150)),
             ],
         ),
     ];

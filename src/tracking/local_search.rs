@@ -301,10 +301,12 @@ impl Searcher<'_> {
         }
     }
 
-    /// Whether a self pair farther than the thickness would step into the excluded zone: some
-    /// excluded neighbour pair is strictly closer than it (see [`Searcher::descend`]).
+    /// Whether a self pair farther than `slide_limit` would step into the excluded zone: some
+    /// excluded neighbour pair is strictly closer than it (see [`Searcher::descend`]). Closer
+    /// pairs are kept: they may be the two sides of a fold closing up, followed until they
+    /// touch.
     pub fn sliding(&self, l: &Located) -> bool {
-        if !self.self_mode || l.cp.distance <= self.thickness {
+        if !self.self_mode || l.cp.distance <= self.slide_limit {
             return false;
         }
         let mut ca: SmallVec<[u32; 48]> = SmallVec::new();

@@ -35,7 +35,7 @@ pub(crate) struct SamplerScratch {
 const UNIFORM_SHARE: f64 = 0.25;
 
 /// One sample in this many is spent on a crease probe (self-collision).
-const CREASE_SHARE: usize = 2;
+const CREASE_SHARE: usize = 4;
 
 /// Edges shorter than this fraction of their rest length are collapsed: crease probe
 /// candidates, like edges folded past 90°.

@@ -16,7 +16,7 @@ use super::sampling::{SamplerScratch, draw};
 use super::surface::{Placed, TrackedSurface};
 use crate::geometry::{ClosestPoints, Pose};
 
-/// Sliding self pairs within this many mean edge lengths keep descending (see
+/// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
 /// `Searcher::slide_limit`).
 const SLIDE_LIMIT_EDGES: f64 = 2.0;
 
