@@ -39,10 +39,12 @@
 
 pub mod adb;
 pub mod bvh;
+pub mod deform;
 pub mod ecs;
 pub mod geometry;
 pub mod mesh;
 pub mod poses;
+pub mod tracking;
 
 /// The types most programs need, in one import.
 pub mod prelude {

@@ -329,6 +329,155 @@ fn file_errors_name_the_path_and_line() {
     }
 }
 
+// ---------------------------------------------------------------- large input, streamed
+
+/// OBJ text produced lazily, line by line, by `next_line(k)` for the 1-based line `k` (`None`
+/// ends it, as does reaching 32 MiB); counts the bytes handed out. Nothing is ever held but the
+/// current line.
+struct Generated<F> {
+    next_line: F,
+    line: u64,
+    pending: Vec<u8>,
+    at: usize,
+    bytes: u64,
+}
+
+impl<F: FnMut(u64) -> Option<Vec<u8>>> Generated<F> {
+    fn new(next_line: F) -> Self {
+        Self {
+            next_line,
+            line: 0,
+            pending: Vec::new(),
+            at: 0,
+            bytes: 0,
+        }
+    }
+}
+
+impl<F: FnMut(u64) -> Option<Vec<u8>>> std::io::Read for Generated<F> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        if self.bytes >= 32 * MIB {
+            return Ok(0); // "endless" sources end here, so a loader that slurps fails, not hangs
+        }
+        if self.at == self.pending.len() {
+            self.line += 1;
+            match (self.next_line)(self.line) {
+                Some(l) => (self.pending, self.at) = (l, 0),
+                None => return Ok(0),
+            }
+        }
+        let n = buf.len().min(self.pending.len() - self.at);
+        buf[..n].copy_from_slice(&self.pending[self.at..self.at + n]);
+        self.at += n;
+        self.bytes += n as u64;
+        Ok(n)
+    }
+}
+
+const MIB: u64 = 1 << 20;
+
+#[test]
+fn a_large_file_is_read_line_by_line() {
+    // 300,000 vertices on a grid, then 300,000 faces: about 9 MB of text never held whole.
+    const N: u64 = 300_000;
+    let mut src = Generated::new(|k| match k {
+        1..=N => Some(format!("v {} {} 0\n", k % 1000, k / 1000).into_bytes()),
+        _ if k <= 2 * N => {
+            let i = k - N;
+            Some(format!("f {} {} {}\n", i, i % N + 1, (i + 1) % N + 1).into_bytes())
+        }
+        _ => None,
+    });
+    let mesh = TriMesh::from_obj_reader(
+        std::io::BufReader::with_capacity(4096, &mut src),
+        Path::new("mesh.obj"),
+    )
+    .unwrap();
+    assert_eq!(
+        (mesh.vertex_count(), mesh.triangle_count()),
+        (N as usize, N as usize)
+    );
+    assert_eq!(mesh.positions()[1234], Vec3::new(235.0, 1.0, 0.0)); // line 1235
+    assert_eq!(mesh.triangles()[N as usize - 1], [N as u32 - 1, 0, 1]);
+    assert!(src.bytes > 8 * MIB, "{} bytes", src.bytes);
+}
+
+#[test]
+fn an_error_deep_in_an_endless_file_names_its_line_and_stops_reading() {
+    // Valid vertices forever, except a NaN on line 400,000: the loader must stop there (an
+    // implementation reading the whole input first would never return).
+    const BAD: u64 = 400_000;
+    let mut src = Generated::new(|k| {
+        Some(if k == BAD {
+            b"v 1 nan 2\n".to_vec()
+        } else {
+            format!("v {k} 0 0\n").into_bytes()
+        })
+    });
+    let result = TriMesh::from_obj_reader(
+        std::io::BufReader::with_capacity(4096, &mut src),
+        Path::new("mesh.obj"),
+    );
+    expect_malformed(result, BAD as usize, &["vertex 400000", "NaN"]);
+    assert_eq!(src.line, BAD, "read past the bad line");
+}
+
+#[test]
+fn an_endless_line_is_refused_after_a_bounded_read() {
+    // No line break ever (binary data, or a broken export): refused once the statement passes
+    // 1 MiB, having read little more than that.
+    let mut src = Generated::new(|_| Some(b"v 1 2 3 ".to_vec()));
+    let result = TriMesh::from_obj_reader(std::io::BufReader::new(&mut src), Path::new("mesh.obj"));
+    expect_malformed(result, 1, &["longer than 1 MiB"]);
+    assert!(src.bytes <= MIB + 64 * 1024, "{} bytes read", src.bytes);
+
+    // An endless chain of `\` continuations: refused naming the line the statement started on.
+    let mut src = Generated::new(|k| {
+        Some(if k < 3 {
+            b"v 0 0 0\n".to_vec()
+        } else {
+            b"f 1 2 \\\n".to_vec()
+        })
+    });
+    let result = TriMesh::from_obj_reader(std::io::BufReader::new(&mut src), Path::new("mesh.obj"));
+    expect_malformed(result, 3, &["longer than 1 MiB"]);
+    // Each 8-byte line adds 7 bytes to the statement (the `\` and line break become a space).
+    assert!(
+        src.bytes <= MIB * 8 / 7 + 64 * 1024,
+        "{} bytes read",
+        src.bytes
+    );
+}
+
+#[test]
+fn statements_up_to_one_mib_are_accepted() {
+    let limit = MIB as usize;
+    let line = |len: usize| {
+        let mut l = b"v 1 2 3".to_vec();
+        l.resize(len, b' ');
+        l.push(b'\n');
+        l
+    };
+    let faces = b"v 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    let at_limit = [line(limit), faces.to_vec()].concat();
+    let mesh = TriMesh::from_obj_reader(at_limit.as_slice(), Path::new("mesh.obj")).unwrap();
+    assert_eq!(mesh.positions()[0], Vec3::new(1.0, 2.0, 3.0));
+    let over = [line(limit + 1), faces.to_vec()].concat();
+    expect_malformed(
+        TriMesh::from_obj_reader(over.as_slice(), Path::new("mesh.obj")),
+        1,
+        &["longer than 1 MiB"],
+    );
+    // Also at the end of the input without a final line break.
+    let last = [faces.to_vec(), line(limit + 1)].concat();
+    let last = &last[..last.len() - 1];
+    expect_malformed(
+        TriMesh::from_obj_reader(last, Path::new("mesh.obj")),
+        4,
+        &["longer than 1 MiB"],
+    );
+}
+
 // ---------------------------------------------------------------- good OBJ input
 
 #[test]

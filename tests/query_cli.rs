@@ -2,8 +2,10 @@
 //! shared mesh, and clean rejection of bad input (exit code 2, one line naming file and line).
 mod common;
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Command;
+
+use common::cli::{query_exe, rows, run, run_exact, scratch, write_obj};
 
 use parry3d::math::Pose as ParryPose;
 use parry3d::query::intersection_test;
@@ -11,59 +13,6 @@ use parry3d::shape::TriMesh as ParryMesh;
 use stochastic_collision::bvh::CollisionMesh;
 use stochastic_collision::mesh::{TriMesh, generate};
 use stochastic_collision::poses::{near_contact_poses, write_poses_csv};
-
-/// The example binary that `cargo test` builds next to the test binaries.
-fn query_exe() -> PathBuf {
-    let deps = std::env::current_exe()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .to_path_buf();
-    let exe = deps
-        .parent()
-        .unwrap()
-        .join("examples")
-        .join(format!("query{}", std::env::consts::EXE_SUFFIX));
-    assert!(
-        exe.is_file(),
-        "{} not built (run through `cargo test`)",
-        exe.display()
-    );
-    exe
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("sc_query_cli_{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn write_obj(path: &Path, mesh: &TriMesh) {
-    let mut s = String::new();
-    for p in mesh.positions() {
-        s += &format!("v {} {} {}\n", p.x, p.y, p.z);
-    }
-    for t in mesh.triangles() {
-        s += &format!("f {} {} {}\n", t[0] + 1, t[1] + 1, t[2] + 1);
-    }
-    std::fs::write(path, s).unwrap();
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(query_exe()).args(args).output().unwrap()
-}
-
-fn rows(stdout: &[u8]) -> Vec<Vec<String>> {
-    let text = String::from_utf8(stdout.to_vec()).unwrap();
-    let mut lines = text.lines();
-    assert_eq!(
-        lines.next(),
-        Some("index,collides,probability,time_ns,nodes_visited")
-    );
-    lines
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect()
-}
 
 /// Runs the example on near-contact poses of `mesh_path` against itself and checks every row
 /// against parry (poses in the touching band excluded, as in the oracle test).
@@ -150,19 +99,7 @@ fn writes_to_stdout_without_out() {
         "tx,ty,tz,qx,qy,qz,qw\n1.5,0,0,0,0,0,1\n5,0,0,0,0,0,1\n",
     )
     .unwrap();
-    let m = mesh.to_str().unwrap();
-    let out = run(&[
-        "--a",
-        m,
-        "--b",
-        m,
-        "--poses",
-        poses.to_str().unwrap(),
-        "--mode",
-        "exact",
-    ]);
-    assert!(out.status.success());
-    let rows = rows(&out.stdout);
+    let rows = run_exact(&mesh, &mesh, &poses);
     assert_eq!(rows.len(), 2);
     assert_eq!((rows[0][1].as_str(), rows[1][1].as_str()), ("1", "0"));
 }

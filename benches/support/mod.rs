@@ -26,6 +26,18 @@ pub fn bench_meshes() -> Vec<(String, TriMesh)> {
     out
 }
 
+/// A shared mesh by file name, or `None` (with a note) when it is not there.
+pub fn shared_mesh(file: &str) -> Option<TriMesh> {
+    let path = common::shared_mesh(file)?;
+    match TriMesh::from_obj(&path) {
+        Ok(mesh) => Some(mesh),
+        Err(e) => {
+            eprintln!("note: skipping {file}: {e}");
+            None
+        }
+    }
+}
+
 /// Near-contact poses of a mesh against itself: offsets within ±2 % of the size.
 pub fn bench_poses(mesh: &CollisionMesh, count: usize) -> Vec<ApproachPose> {
     near_contact_poses(mesh, mesh, count, 0.02, 0x5eed)

@@ -203,7 +203,8 @@ impl Ord for Entry {
 /// traversal): node pairs are expanded in order of their estimated probability of containing
 /// intersecting triangles; the answer is "collision" once `k_min` pairs reach `p_min`, "no
 /// collision" when no pair with a positive probability is left, and the best estimate so far
-/// when the budget runs out.
+/// when the budget runs out. A pose that is not [finite](Pose::is_finite) places its mesh
+/// nowhere: no collision, probability 0.
 ///
 /// # Example
 /// ```
@@ -241,7 +242,8 @@ pub fn adb_intersects(
         max_pair_probability: 0.0,
         witness: None,
     };
-    if !nodes_overlap(a, b, &frame, 0, 0) {
+    // A pose that is not finite places its mesh nowhere.
+    if !rel.is_finite() || !nodes_overlap(a, b, &frame, 0, 0) {
         return out;
     }
     let witness = |ia: u32, ib: u32, triangles: Option<TrianglePair>| {

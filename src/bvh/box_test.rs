@@ -42,7 +42,8 @@ impl RelativeFrame {
             // The exact tests transform in f64 from the same quaternion; the f32 matrix and the
             // f32 arithmetic here differ from that by a few ulps of the scale. 32 ulps covers
             // it with room to spare and culls nothing measurable less.
-            margin: scale * 32.0 * f32::EPSILON + f32::MIN_POSITIVE,
+            // (The constant is folded first: `scale * 32.0` would overflow above 1e37.)
+            margin: scale * (32.0 * f32::EPSILON) + f32::MIN_POSITIVE,
         }
     }
 

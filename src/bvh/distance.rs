@@ -20,7 +20,8 @@ pub struct MeshDistance {
 }
 
 /// Distance and closest points between the surfaces of `a` at `pose_a` and `b` at `pose_b`,
-/// or `None` if they are farther apart than `max_distance` (pass `f32::INFINITY` for no limit).
+/// or `None` if they are farther apart than `max_distance` (pass `f32::INFINITY` for no limit)
+/// or a pose is not [finite](Pose::is_finite).
 /// Exact up to `f64` rounding of the closest-point computation; stops early at distance 0.
 ///
 /// # Example
@@ -42,6 +43,10 @@ pub fn closest_points(
     ws: &mut QueryWorkspace,
 ) -> Option<MeshDistance> {
     let rel = pose_a.inverse_mul(pose_b);
+    if !rel.is_finite() {
+        ws.node_pairs_visited = 0;
+        return None; // a pose that is not finite places its mesh nowhere
+    }
     let (ta, tb) = (a.bvh(), b.bvh());
     let frame = RelativeFrame::new(&rel, ta, tb);
     let rel64 = rel.to_f64();

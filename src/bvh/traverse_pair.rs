@@ -34,7 +34,8 @@ pub struct ExactOutcome {
 }
 
 /// Whether the surfaces of `a` at `pose_a` and `b` at `pose_b` touch or intersect: exact, stops
-/// at the first intersecting triangle pair.
+/// at the first intersecting triangle pair. A pose that is not [finite](Pose::is_finite) places
+/// its mesh nowhere: `false` (and likewise no pairs, no containment for the other queries here).
 ///
 /// # Example
 /// ```
@@ -70,10 +71,11 @@ pub fn intersects_with(
         witness = Some(pair);
         ControlFlow::Break(())
     });
-    let rel = pose_a.inverse_mul(pose_b).to_f64();
+    let rel = pose_a.inverse_mul(pose_b);
     let contained = witness.is_none()
         && options.solid
-        && (contained_in(b, a, &rel) || contained_in(a, b, &rel.inverse()));
+        && rel.is_finite()
+        && (contained_in(b, a, &rel.to_f64()) || contained_in(a, b, &rel.to_f64().inverse()));
     ExactOutcome {
         collides: witness.is_some() || contained,
         witness,
@@ -92,7 +94,9 @@ pub fn root_boxes_overlap(
     pose_b: &Pose,
 ) -> bool {
     let rel = pose_a.inverse_mul(pose_b);
-    RelativeFrame::new(&rel, a.bvh(), b.bvh()).overlap(&a.bvh().nodes()[0], &b.bvh().nodes()[0])
+    rel.is_finite()
+        && RelativeFrame::new(&rel, a.bvh(), b.bvh())
+            .overlap(&a.bvh().nodes()[0], &b.bvh().nodes()[0])
 }
 
 /// All intersecting (or touching) triangle pairs of `a` and `b`, appended to `out` in
@@ -154,6 +158,10 @@ fn descend_from(
     mut on_hit: impl FnMut(TrianglePair) -> ControlFlow<()>,
 ) {
     let rel = *rel;
+    if !rel.is_finite() {
+        ws.node_pairs_visited = 0;
+        return; // a pose that is not finite places its mesh nowhere
+    }
     let (ta, tb) = (a.bvh(), b.bvh());
     let frame = RelativeFrame::new(&rel, ta, tb);
     let rel64 = rel.to_f64();

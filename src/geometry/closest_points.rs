@@ -114,8 +114,17 @@ pub fn closest_points_segment_segment(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3
 ///   distance of two disjoint triangles (degenerate ones included: their edges cover them).
 ///   Triangles apart by less than rounding may get a distance that rounds to 0.
 ///
-/// `point_a` lies on `a`, `point_b` on `b`.
+/// `point_a` lies on `a`, `point_b` on `b`. Never NaN for finite input; for a NaN or infinite
+/// corner the distance is `+∞` (such a triangle is no point set) and the points are the
+/// first corners.
 pub fn closest_points_triangle_triangle(a: &[DVec3; 3], b: &[DVec3; 3]) -> ClosestPoints {
+    if !a.iter().chain(b).all(|p| p.is_finite()) {
+        return ClosestPoints {
+            distance: f64::INFINITY,
+            point_a: a[0],
+            point_b: b[0],
+        };
+    }
     let intersecting = triangles_intersect(a, b);
     if intersecting && let Some(x) = intersection_point(a, b) {
         return ClosestPoints {
@@ -124,10 +133,6 @@ pub fn closest_points_triangle_triangle(a: &[DVec3; 3], b: &[DVec3; 3]) -> Close
             point_b: x,
         };
     }
-    debug_assert!(
-        !intersecting,
-        "intersection_point disagrees with triangles_intersect"
-    );
 
     let mut best = ClosestPoints::new(closest_point_on_triangle(b[0], a), b[0]);
     let mut consider = |c: ClosestPoints| {

@@ -26,7 +26,9 @@ impl Pose {
         translation: Vec3::ZERO,
     };
 
-    /// A pose from its parts. The rotation is normalised.
+    /// A pose from its parts. The rotation is normalised; one that cannot be (zero, NaN,
+    /// infinite, or so large that its squared length overflows) gives a pose that is not
+    /// [finite](Pose::is_finite).
     #[inline]
     pub fn new(translation: Vec3, rotation: Quat) -> Self {
         Self {
@@ -42,6 +44,25 @@ impl Pose {
             rotation: Quat::IDENTITY,
             translation,
         }
+    }
+
+    /// Whether the translation is finite and the rotation can be normalised (finite, not zero,
+    /// squared length not overflowing). Queries given a pose that is not (NaN or infinite
+    /// parts, a zero rotation) place that mesh nowhere: no collision, no distance, probability
+    /// 0, rather than an answer computed from NaN. Check this before querying to report such a
+    /// pose as an error.
+    ///
+    /// # Example
+    /// ```
+    /// use stochastic_collision::prelude::*;
+    /// assert!(Pose::from_translation(Vec3::X).is_finite());
+    /// assert!(!Pose::new(Vec3::ZERO, Quat::from_xyzw(0.0, 0.0, 0.0, 0.0)).is_finite());
+    /// assert!(!Pose::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)).is_finite());
+    /// ```
+    #[inline]
+    pub fn is_finite(&self) -> bool {
+        let len2 = self.rotation.length_squared();
+        self.translation.is_finite() && len2.is_finite() && len2 > 0.0
     }
 
     /// Applies the pose to a point.

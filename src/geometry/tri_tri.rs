@@ -36,10 +36,46 @@ use super::predicates::orient3d as o3;
 /// sign comes from an exact predicate, so the result is exact as long as the predicates'
 /// intermediate products neither overflow nor underflow: always for corners in the `f32`
 /// range (the crate's storage), and for `f64` corners whose nonzero coordinates and nonzero
-/// coordinate differences are roughly within `[1e-60, 1e60]` in magnitude. Input must be
-/// finite.
+/// coordinate differences are roughly within `[1e-60, 1e60]` in magnitude. Corners beyond
+/// about `2^300 ≈ 2e90` (where orientations could overflow) are first scaled by a power of two, which
+/// is exact, so larger finite input is decided just as exactly (short of tiny coordinates
+/// underflowing). A triangle with a NaN or infinite coordinate is no point set: the result is
+/// `false`.
 #[inline]
 pub fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
+    // The sum of all |coordinates| bounds each of them, and is NaN or infinite when one is
+    // (and NaN compares false): one branch on the hot path.
+    let sum =
+        (a[0].abs() + a[1].abs() + a[2].abs() + b[0].abs() + b[1].abs() + b[2].abs()).element_sum();
+    if sum <= MAX_DIRECT {
+        intersect_in_range(a, b)
+    } else {
+        intersect_out_of_range(a, b)
+    }
+}
+
+/// Largest sum of coordinate magnitudes decided without rescaling: coordinates are then at most
+/// `2^300` and differences `2^301`, so the orientations' products (degree 3, at most `2^906`)
+/// cannot overflow.
+const MAX_DIRECT: f64 = 2.037_035_976_334_486e90; // 2^300
+
+/// [`triangles_intersect`] for corners beyond [`MAX_DIRECT`] or not finite: `false` for a NaN
+/// or infinite corner, else the test on the corners scaled by a power of two that brings the
+/// largest coordinate to at most 1 (exact, short of underflow of far smaller coordinates).
+#[cold]
+fn intersect_out_of_range(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
+    let corners = a.iter().chain(b);
+    if !corners.clone().all(|p| p.is_finite()) {
+        return false;
+    }
+    let m = corners.fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    let k = 2f64.powi(-(m.log2().ceil() as i32));
+    intersect_in_range(&a.map(|p| p * k), &b.map(|p| p * k))
+}
+
+/// The test on corners within [`MAX_DIRECT`].
+#[inline(always)]
+fn intersect_in_range(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
     // Sides of b's corners with respect to a's plane.
     let sb = [
         sign(o3(a[0], a[1], a[2], b[0])),
@@ -442,6 +478,11 @@ mod tests {
 
     fn v(x: f64, y: f64, z: f64) -> DVec3 {
         DVec3::new(x, y, z)
+    }
+
+    #[test]
+    fn max_direct_is_two_to_the_300() {
+        assert_eq!(MAX_DIRECT, 2f64.powi(300));
     }
 
     /// Checks the answer under corner permutations, swapping and a few exact transforms.

@@ -6,7 +6,7 @@
 //! problem. Here vertex `i` of the mesh is always the `i`-th `v` line of the file.
 
 use std::fs::File;
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::Path;
 
 use glam::Vec3;
@@ -74,8 +74,9 @@ impl TriMesh {
     /// [`MeshError::Malformed`], naming the file and the 1-based line, for a `v` statement
     /// without three numbers or with a NaN / infinite (or `f32`-overflowing) coordinate, a face
     /// with fewer than three vertices, an unparsable index, index 0, an index beyond the
-    /// vertices, or binary data; [`MeshError::Malformed`] with line 0 for a file without faces.
-    /// Never panics, whatever the content.
+    /// vertices, binary data, or a statement longer than 1 MiB (input is read line by line, so
+    /// memory stays bounded whatever the file); [`MeshError::Malformed`] with line 0 for a file
+    /// without faces. Never panics, whatever the content.
     ///
     /// # Example
     /// ```no_run
@@ -156,6 +157,12 @@ impl TriMesh {
     }
 }
 
+/// Longest statement accepted, in bytes (a line, or lines joined by `\`): 1 MiB, room for a
+/// face of about 100,000 vertices. Longer is refused, so that input without line breaks
+/// (binary data, a runaway continuation) is never buffered whole: memory stays bounded by this
+/// plus the mesh itself.
+const MAX_STATEMENT_BYTES: usize = 1 << 20;
+
 /// A face that refers to a vertex not yet defined when it was read (allowed if the vertex
 /// comes later in the file).
 struct ForwardReference {
@@ -200,7 +207,7 @@ impl<'a> Parser<'a> {
         let mut start_line = 1usize;
         loop {
             raw.clear();
-            let read = reader
+            let read = Read::take(&mut reader, MAX_STATEMENT_BYTES as u64 + 1)
                 .read_until(b'\n', &mut raw)
                 .map_err(|e| MeshError::Io {
                     path: self.name.to_path_buf(),
@@ -210,15 +217,25 @@ impl<'a> Parser<'a> {
                 break;
             }
             line_no += 1;
+            if statement.is_empty() {
+                start_line = line_no;
+            }
+            let content = raw.len() - usize::from(raw.last() == Some(&b'\n'));
+            if content + statement.len() > MAX_STATEMENT_BYTES {
+                return Err(self.error(
+                    start_line,
+                    format!(
+                        "statement longer than {} MiB; this does not look like OBJ text",
+                        MAX_STATEMENT_BYTES >> 20
+                    ),
+                ));
+            }
             let mut line = raw.as_slice();
             if line_no == 1 {
                 line = line.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(line);
             }
             while let [rest @ .., b'\n' | b'\r'] = line {
                 line = rest;
-            }
-            if statement.is_empty() {
-                start_line = line_no;
             }
             if let [rest @ .., b'\\'] = line {
                 statement.extend_from_slice(rest);

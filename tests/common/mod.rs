@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+pub mod cli;
+
 /// The shared meshes the exact-query and ADB issues name for checks against parry and for
 /// the benchmarks, smallest first.
 pub const QUERY_MESHES: [&str; 6] = [

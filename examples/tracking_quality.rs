@@ -1,0 +1,824 @@
+//! What stochastic tracking costs and misses, against the exact self-collision pass.
+//!
+//! ```text
+//! cargo run --release --example tracking_quality -- [--mesh PATH] [--frames 120] [--seed S] \
+//!     [--pairs-per-frame N] [--json out.json] [--out-dir DIR] [--sweep a,b,c | --no-sweep] \
+//!     [--sampling hierarchy|uniform|velocity] [--search two-step|full]
+//! ```
+//!
+//! The mesh (default: a generated capped tube, like a stretch of gut; any OBJ with `--mesh`)
+//! is animated by a seeded [`Whirl`]: its halves wind around an axis in opposite senses until
+//! they cut through each other, then unwind, in episodes. Every frame, the exact pass
+//! ([`self_contacts`], after a refit) finds every pair of triangles closer than the thickness
+//! (a tenth of the mean edge length) that are not adjacent in the tracker's sense (within one
+//! vertex ring, [`triangles_within_rings`]); a *contact region* is a connected set of
+//! them (triangles linked by a contact pair or a shared vertex), followed from frame to frame
+//! while it keeps a vertex in common with its previous shape or a contact point within two
+//! tolerances of one of its previous points (regions move); regions that merge are followed
+//! on together (hitting the merged region detects each). The tracker runs on the same
+//! positions; a contact it reports *hits* a region when it lies within thickness + tolerance
+//! (one mean edge length) of one of the region's exact contact points, and is *false* when it
+//! hits none.
+//!
+//! JSON fields: `recall` (regions hit within 3 frames of their first appearance; regions that
+//! appear in the last 3 frames and are not hit yet are left out), `false_contact_rate`,
+//! `regions`, `latency_frames_p95` (over the hit regions), `tracker_us_per_frame` (surface
+//! update + step), `exact_us_per_frame` (refit + exact pass), both in thread CPU time (the
+//! machine may be shared), `time_ratio`, `pairs_per_frame`,
+//! and the same for each `sweep` entry. Writes `frames.csv`, `sweep.csv`,
+//! `recall_vs_pairs.svg` and `time_vs_pairs.svg` to `--out-dir` (default
+//! `target/tracking_quality`). With `TRACKING_QUALITY_DEBUG=1`, each missed region is listed
+//! (first frame, frames alive, largest number of exact pairs).
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use glam::Vec3;
+use plotters::prelude::*;
+use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, SelfContact, self_contacts};
+use stochastic_collision::deform::Whirl;
+use stochastic_collision::geometry::closest_points_triangle_triangle;
+use stochastic_collision::mesh::{Topology, TriMesh, generate};
+use stochastic_collision::tracking::{
+    Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig, triangles_within_rings,
+};
+
+/// CPU time of the calling thread, µs: what the work cost, whatever else runs on the machine
+/// (falls back to wall-clock time where the platform has no thread clock).
+fn cpu_us() -> f64 {
+    #[cfg(unix)]
+    {
+        let mut ts = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: `ts` is a valid, writable timespec; the clock id is a constant.
+        if unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) } == 0 {
+            return ts.tv_sec as f64 * 1e6 + ts.tv_nsec as f64 * 1e-3;
+        }
+    }
+    static START: std::sync::OnceLock<std::time::Instant> = std::sync::OnceLock::new();
+    START
+        .get_or_init(std::time::Instant::now)
+        .elapsed()
+        .as_secs_f64()
+        * 1e6
+}
+
+/// Frames within which a new region must be hit.
+const LATENCY_LIMIT: usize = 3;
+
+struct Settings {
+    mesh: Option<PathBuf>,
+    frames: usize,
+    seed: u64,
+    pairs: usize,
+    json: Option<PathBuf>,
+    out_dir: PathBuf,
+    sweep: Option<Vec<usize>>,
+    sampling: Sampling,
+    search: SearchMode,
+}
+
+fn parse_args() -> Result<Settings, String> {
+    let mut s = Settings {
+        mesh: None,
+        frames: 120,
+        seed: 1,
+        pairs: 64,
+        json: None,
+        out_dir: PathBuf::from("target/tracking_quality"),
+        sweep: Some(Vec::new()),
+        sampling: Sampling::default(),
+        search: SearchMode::default(),
+    };
+    let mut it = std::env::args_os().skip(1);
+    let text = |v: Option<std::ffi::OsString>, flag: &str| -> Result<String, String> {
+        v.and_then(|v| v.into_string().ok())
+            .ok_or(format!("{flag} needs a value"))
+    };
+    let number = |v: Option<std::ffi::OsString>, flag: &str| -> Result<u64, String> {
+        text(v, flag)?
+            .parse()
+            .map_err(|_| format!("{flag} needs a non-negative integer"))
+    };
+    while let Some(flag) = it.next() {
+        match flag.to_str().unwrap_or("") {
+            "--mesh" => s.mesh = Some(PathBuf::from(it.next().ok_or("--mesh needs a path")?)),
+            "--frames" => s.frames = number(it.next(), "--frames")?.max(1) as usize,
+            "--seed" => s.seed = number(it.next(), "--seed")?,
+            "--pairs-per-frame" => s.pairs = number(it.next(), "--pairs-per-frame")? as usize,
+            "--json" => s.json = Some(PathBuf::from(it.next().ok_or("--json needs a path")?)),
+            "--out-dir" => {
+                s.out_dir = PathBuf::from(it.next().ok_or("--out-dir needs a directory")?)
+            }
+            "--no-sweep" => s.sweep = None,
+            "--sweep" => {
+                let list = text(it.next(), "--sweep")?;
+                let values: Result<Vec<usize>, _> = list.split(',').map(str::parse).collect();
+                s.sweep = Some(values.map_err(|_| "--sweep needs numbers like 8,16,32")?);
+            }
+            "--sampling" => {
+                s.sampling = match text(it.next(), "--sampling")?.as_str() {
+                    "hierarchy" => Sampling::Hierarchy,
+                    "uniform" => Sampling::Uniform,
+                    "velocity" => Sampling::Velocity,
+                    o => {
+                        return Err(format!(
+                            "unknown sampling `{o}` (hierarchy|uniform|velocity)"
+                        ));
+                    }
+                }
+            }
+            "--search" => {
+                s.search = match text(it.next(), "--search")?.as_str() {
+                    "two-step" => SearchMode::TwoStep,
+                    "full" => SearchMode::Full,
+                    o => return Err(format!("unknown search `{o}` (two-step|full)")),
+                }
+            }
+            other => {
+                return Err(format!(
+                    "unknown argument `{other}` (known: --mesh, --frames, --seed, --pairs-per-frame, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
+                ));
+            }
+        }
+    }
+    if let Some(sw) = &mut s.sweep {
+        if sw.is_empty() {
+            let n = s.pairs.max(1);
+            *sw = vec![n / 4, n / 2, n, 2 * n, 4 * n];
+        }
+        sw.retain(|&v| v > 0);
+        sw.sort_unstable();
+        sw.dedup();
+    }
+    Ok(s)
+}
+
+/// One exact contact region in one frame.
+struct Region {
+    /// The tracks it continues, ascending: a new region starts a track; a region that moved
+    /// continues its own; regions that merged continue all of theirs (hitting the merged
+    /// region detects each of them).
+    tracks: Vec<usize>,
+}
+
+/// The exact answer of one frame.
+struct ExactFrame {
+    us: f64,
+    pairs: usize,
+    regions: Vec<Region>,
+    /// Contact points (midpoints of the closest points) and the region of each.
+    points: Vec<(Vec3, usize)>,
+    /// The triangle pairs of those points.
+    triangle_pairs: Vec<(u32, u32)>,
+}
+
+struct Truth {
+    frames: Vec<ExactFrame>,
+    /// Per track: first frame.
+    first_seen: Vec<usize>,
+}
+
+fn progress(label: &str, done: usize, total: usize) {
+    // Redraw about every 2 %.
+    let step = (total / 50).max(1);
+    if !done.is_multiple_of(step) && done < total {
+        return;
+    }
+    let width = 30;
+    let filled = done * width / total.max(1);
+    eprint!(
+        "\r  {label:<24} [{}{}] {:>3}%",
+        "#".repeat(filled),
+        " ".repeat(width - filled),
+        done * 100 / total.max(1)
+    );
+    if done >= total {
+        eprintln!();
+    }
+}
+
+struct UnionFind(Vec<u32>);
+impl UnionFind {
+    fn find(&mut self, mut x: u32) -> u32 {
+        while self.0[x as usize] != x {
+            let p = self.0[x as usize];
+            self.0[x as usize] = self.0[p as usize];
+            x = p;
+        }
+        x
+    }
+    fn union(&mut self, a: u32, b: u32) {
+        let (a, b) = (self.find(a), self.find(b));
+        if a != b {
+            self.0[a.max(b) as usize] = a.min(b);
+        }
+    }
+}
+
+fn exact_truth(
+    mesh: &TriMesh,
+    whirl: &Whirl,
+    thickness: f32,
+    exclusion_rings: u32,
+    continuity: f32,
+) -> Truth {
+    let topology = Topology::new(mesh);
+    let mut cm = CollisionMesh::new(mesh.clone());
+    let mut ws = QueryWorkspace::new();
+    let mut pairs: Vec<SelfContact> = Vec::new();
+    let mut positions = Vec::new();
+    let mut frames = Vec::new();
+    let mut first_seen = Vec::new();
+    // Vertex → the previous frame's region that used it.
+    let mut prev_mark: HashMap<u32, usize> = HashMap::new();
+    let mut prev_regions: Vec<Region> = Vec::new();
+    // The previous frame's contact points, with their regions.
+    let mut prev_points: Vec<(Vec3, usize)> = Vec::new();
+    let mut near = Vec::new();
+    let tris = mesh.triangles();
+    for f in 0..whirl.frames() {
+        whirl.positions(f, &mut positions);
+        let t0 = cpu_us();
+        cm.set_positions(&positions)
+            .expect("the whirl keeps positions finite");
+        pairs.clear();
+        self_contacts(&cm, thickness, &mut ws, &mut pairs);
+        // The same adjacency as the tracker's (pairs within `exclusion_rings` rings).
+        pairs.retain(|c| {
+            let (a, b) = (tris[c.pair.a as usize], tris[c.pair.b as usize]);
+            !triangles_within_rings(&topology, a, b, exclusion_rings)
+        });
+        let us = cpu_us() - t0;
+        // Regions: triangles linked by a contact pair or a shared vertex.
+        let mut ids: HashMap<u32, u32> = HashMap::new();
+        let mut uf = UnionFind(Vec::new());
+        let mut id_of = |t: u32, uf: &mut UnionFind| -> u32 {
+            *ids.entry(t).or_insert_with(|| {
+                uf.0.push(uf.0.len() as u32);
+                uf.0.len() as u32 - 1
+            })
+        };
+        let mut vertex_owner: HashMap<u32, u32> = HashMap::new();
+        for c in &pairs {
+            let (a, b) = (id_of(c.pair.a, &mut uf), id_of(c.pair.b, &mut uf));
+            uf.union(a, b);
+            for (t, id) in [(c.pair.a, a), (c.pair.b, b)] {
+                for v in tris[t as usize] {
+                    let o = *vertex_owner.entry(v).or_insert(id);
+                    uf.union(o, id);
+                }
+            }
+        }
+        let pair_points: Vec<(Vec3, u32)> = pairs
+            .iter()
+            .map(|c| {
+                let a = cm.mesh().triangle(c.pair.a as usize).map(|p| p.as_dvec3());
+                let b = cm.mesh().triangle(c.pair.b as usize).map(|p| p.as_dvec3());
+                let cp = closest_points_triangle_triangle(&a, &b);
+                let root = uf.find(ids[&c.pair.a]);
+                (((cp.point_a + cp.point_b) * 0.5).as_vec3(), root)
+            })
+            .collect();
+        // Components → regions, each continuing the tracks of the previous regions it
+        // touches: through a shared vertex, or a contact point within `continuity` of one of
+        // their points (a region that moved).
+        let mut inherited: HashMap<u32, Vec<usize>> = HashMap::new();
+        let prev_grid = PointGrid::new(&prev_points, continuity);
+        for &(p, root) in &pair_points {
+            prev_grid.regions_near(p, &prev_points, &mut near);
+            for &r in &near {
+                inherited
+                    .entry(root)
+                    .or_default()
+                    .extend_from_slice(&prev_regions[r].tracks);
+            }
+        }
+        let mut sorted: Vec<(u32, u32)> = ids.iter().map(|(&t, &i)| (t, i)).collect();
+        sorted.sort_unstable();
+        for &(t, i) in &sorted {
+            let root = uf.find(i);
+            for v in tris[t as usize] {
+                if let Some(&r) = prev_mark.get(&v) {
+                    inherited
+                        .entry(root)
+                        .or_default()
+                        .extend_from_slice(&prev_regions[r].tracks);
+                }
+            }
+        }
+        let mut regions: Vec<Region> = Vec::new();
+        let mut region_of_root: HashMap<u32, usize> = HashMap::new();
+        let mut mark = HashMap::new();
+        for &(t, i) in &sorted {
+            let root = uf.find(i);
+            let r = *region_of_root.entry(root).or_insert_with(|| {
+                let mut tracks = inherited.remove(&root).unwrap_or_default();
+                tracks.sort_unstable();
+                tracks.dedup();
+                if tracks.is_empty() {
+                    first_seen.push(f);
+                    tracks.push(first_seen.len() - 1);
+                }
+                regions.push(Region { tracks });
+                regions.len() - 1
+            });
+            for v in tris[t as usize] {
+                mark.insert(v, r);
+            }
+        }
+        let points: Vec<(Vec3, usize)> = pair_points
+            .iter()
+            .map(|&(p, root)| (p, region_of_root[&root]))
+            .collect();
+        prev_mark = mark;
+        prev_points = points.clone();
+        prev_regions = regions
+            .iter()
+            .map(|r| Region {
+                tracks: r.tracks.clone(),
+            })
+            .collect();
+        frames.push(ExactFrame {
+            us,
+            pairs: pairs.len(),
+            regions,
+            points,
+            triangle_pairs: pairs.iter().map(|c| (c.pair.a, c.pair.b)).collect(),
+        });
+        progress("exact self pass", f + 1, whirl.frames());
+    }
+    Truth { frames, first_seen }
+}
+
+/// A uniform grid over the exact contact points of one frame.
+struct PointGrid {
+    cell: f32,
+    cells: HashMap<(i32, i32, i32), Vec<u32>>,
+}
+
+impl PointGrid {
+    fn new(points: &[(Vec3, usize)], cell: f32) -> Self {
+        let mut cells: HashMap<(i32, i32, i32), Vec<u32>> = HashMap::new();
+        for (i, (p, _)) in points.iter().enumerate() {
+            cells.entry(Self::key(*p, cell)).or_default().push(i as u32);
+        }
+        PointGrid { cell, cells }
+    }
+    fn key(p: Vec3, cell: f32) -> (i32, i32, i32) {
+        let q = (p / cell).floor();
+        (q.x as i32, q.y as i32, q.z as i32)
+    }
+    /// Labels (regions, or tracks) of the points within `cell` of `p`.
+    fn regions_near(&self, p: Vec3, points: &[(Vec3, usize)], out: &mut Vec<usize>) {
+        out.clear();
+        let (x, y, z) = Self::key(p, self.cell);
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    if let Some(list) = self.cells.get(&(x + dx, y + dy, z + dz)) {
+                        for &i in list {
+                            let (q, r) = points[i as usize];
+                            if (q - p).length() <= self.cell && !out.contains(&r) {
+                                out.push(r);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[derive(Default, Clone)]
+struct RunResult {
+    pairs_per_frame: usize,
+    recall: f64,
+    false_contact_rate: f64,
+    regions: usize,
+    latency_p95: f64,
+    tracker_us: f64,
+    exact_us: f64,
+    /// Per frame: (contacts, false contacts, active pairs, µs, regions hit).
+    per_frame: Vec<(usize, usize, usize, f64, usize)>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn run_tracker(
+    mesh: &TriMesh,
+    whirl: &Whirl,
+    truth: &Truth,
+    config: TrackerConfig,
+    tolerance: f32,
+) -> RunResult {
+    let mut surface = TrackedSurface::new(mesh.clone());
+    let mut tracker = Tracker::new(config.clone());
+    let radius = config.thickness + tolerance;
+    let mut positions = Vec::new();
+    let mut first_hit: Vec<Option<usize>> = vec![None; truth.first_seen.len()];
+    let (mut reported, mut false_contacts) = (0usize, 0usize);
+    let mut total_us = 0.0;
+    let mut per_frame = Vec::new();
+    let mut near = Vec::new();
+    for (f, exact) in truth.frames.iter().enumerate() {
+        whirl.positions(f, &mut positions);
+        let t0 = cpu_us();
+        surface
+            .set_positions(&positions)
+            .expect("the whirl keeps positions finite");
+        tracker.step_self(&surface);
+        let us = cpu_us() - t0;
+        total_us += us;
+        let grid = PointGrid::new(&exact.points, radius);
+        let mut false_here = 0;
+        let mut hit_here = Vec::new();
+        for c in tracker.contacts() {
+            grid.regions_near((c.point_a + c.point_b) * 0.5, &exact.points, &mut near);
+            if near.is_empty() {
+                false_here += 1;
+            }
+            for &r in &near {
+                for &track in &exact.regions[r].tracks {
+                    if first_hit[track].is_none() {
+                        first_hit[track] = Some(f);
+                    }
+                    if !hit_here.contains(&track) {
+                        hit_here.push(track);
+                    }
+                }
+            }
+        }
+        reported += tracker.contacts().len();
+        false_contacts += false_here;
+        per_frame.push((
+            tracker.contacts().len(),
+            false_here,
+            tracker.pairs().len(),
+            us,
+            hit_here.len(),
+        ));
+    }
+    let frames = truth.frames.len();
+    let (mut counted, mut detected) = (0usize, 0usize);
+    let mut latencies = Vec::new();
+    let debug = std::env::var_os("TRACKING_QUALITY_DEBUG").is_some();
+    let topology = Topology::new(mesh);
+    for (track, &t0) in truth.first_seen.iter().enumerate() {
+        if debug && first_hit[track].is_none_or(|h| h - t0 > LATENCY_LIMIT) {
+            let (frames_alive, max_points) = truth.frames.iter().fold((0, 0), |(n, m), fr| {
+                let pts = fr
+                    .points
+                    .iter()
+                    .filter(|(_, r)| fr.regions[*r].tracks.contains(&track))
+                    .count();
+                (n + usize::from(pts > 0), m.max(pts))
+            });
+            let fr = &truth.frames[t0];
+            let rings: Vec<u32> = fr
+                .points
+                .iter()
+                .zip(&fr.triangle_pairs)
+                .filter(|((_, r), _)| fr.regions[*r].tracks.contains(&track))
+                .map(|(_, &(x, y))| ring_distance(mesh, &topology, x, y, 40))
+                .collect();
+            eprintln!(
+                "missed track {track}: t0 {t0}, hit {:?}, alive {frames_alive} frames, up to {max_points} pairs, rings at t0 {}..{}",
+                first_hit[track],
+                rings.iter().min().unwrap_or(&0),
+                rings.iter().max().unwrap_or(&0)
+            );
+        }
+        let hit = first_hit[track];
+        let in_time = hit.is_some_and(|h| h - t0 <= LATENCY_LIMIT);
+        if let Some(h) = hit {
+            latencies.push((h - t0) as f64);
+        }
+        if in_time || t0 + LATENCY_LIMIT < frames {
+            counted += 1;
+            detected += usize::from(in_time);
+        }
+    }
+    latencies.sort_by(f64::total_cmp);
+    let p95 = if latencies.is_empty() {
+        0.0
+    } else {
+        latencies[((latencies.len() as f64 * 0.95).ceil() as usize).clamp(1, latencies.len()) - 1]
+    };
+    RunResult {
+        pairs_per_frame: config.pairs_per_frame,
+        recall: if counted == 0 {
+            1.0
+        } else {
+            detected as f64 / counted as f64
+        },
+        false_contact_rate: if reported == 0 {
+            0.0
+        } else {
+            false_contacts as f64 / reported as f64
+        },
+        regions: counted,
+        latency_p95: p95,
+        tracker_us: total_us / frames as f64,
+        exact_us: truth.frames.iter().map(|f| f.us).sum::<f64>() / frames as f64,
+        per_frame,
+    }
+}
+
+/// Vertex rings between two triangles (0: they share a vertex), up to `limit`.
+fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32) -> u32 {
+    let target = mesh.triangles()[b as usize];
+    let mut seen: std::collections::HashSet<u32> =
+        mesh.triangles()[a as usize].into_iter().collect();
+    let mut front: Vec<u32> = seen.iter().copied().collect();
+    for r in 0..limit {
+        if front.iter().any(|v| target.contains(v)) {
+            return r;
+        }
+        let mut next = Vec::new();
+        for &v in &front {
+            for &w in topology.vertex_neighbours(v) {
+                if seen.insert(w) {
+                    next.push(w);
+                }
+            }
+        }
+        front = next;
+    }
+    limit
+}
+
+fn json_run(r: &RunResult) -> String {
+    format!(
+        "\"pairs_per_frame\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
+        r.pairs_per_frame,
+        r.recall,
+        r.false_contact_rate,
+        r.regions,
+        r.latency_p95,
+        r.tracker_us,
+        r.exact_us,
+        r.tracker_us / r.exact_us.max(1e-9)
+    )
+}
+
+/// A labelled curve of a plot.
+type Series<'a> = (&'a str, Vec<(f64, f64)>, RGBColor);
+
+fn plot(
+    path: &std::path::Path,
+    title: &str,
+    y_desc: &str,
+    series: &[Series],
+) -> Result<(), Box<dyn std::error::Error>> {
+    let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let xmax = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.0))
+        .fold(1.0, f64::max);
+    let xmin = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.0))
+        .fold(xmax, f64::min);
+    let ymax = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.1))
+        .fold(1e-9, f64::max);
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d((xmin / 1.5..xmax * 1.5).log_scale(), 0.0f64..ymax * 1.15)?;
+    chart
+        .configure_mesh()
+        .x_desc("new pairs per frame (log)")
+        .x_labels(12)
+        .x_label_formatter(&|x| format!("{x:.0}"))
+        .y_desc(y_desc)
+        .draw()?;
+    for (label, pts, color) in series {
+        let color = *color;
+        chart
+            .draw_series(LineSeries::new(pts.clone(), color.stroke_width(2)))?
+            .label(*label)
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 16, y)], color.stroke_width(2))
+            });
+        chart.draw_series(pts.iter().map(|&p| Circle::new(p, 3, color.filled())))?;
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()?;
+    root.present()?;
+    Ok(())
+}
+
+fn main() {
+    let settings = match parse_args() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("tracking_quality: {e}");
+            std::process::exit(2);
+        }
+    };
+    let (name, mesh) = match &settings.mesh {
+        Some(path) => match TriMesh::from_obj(path) {
+            Ok(m) => (path.display().to_string(), m),
+            Err(e) => {
+                eprintln!("tracking_quality: {e}");
+                std::process::exit(2);
+            }
+        },
+        None => (
+            "generated capped tube".to_string(),
+            generate::tube(0.08, 2.0, 24, 160, true),
+        ),
+    };
+    let whirl = Whirl::new(&mesh, settings.frames, settings.seed);
+    let probe = TrackedSurface::new(mesh.clone());
+    let mut config = TrackerConfig::for_surface(&probe);
+    config.seed = settings.seed;
+    config.sampling = settings.sampling;
+    config.search = settings.search;
+    let tolerance = probe.mean_edge_length();
+    println!(
+        "tracking_quality: {name}: {} triangles, {} boundary edges, {} non-manifold; {} frames, {} episode(s); thickness {:.4}, tolerance {:.4}",
+        mesh.triangle_count(),
+        Topology::new(&mesh).boundary_edge_count(),
+        Topology::new(&mesh).non_manifold_edge_count(),
+        settings.frames,
+        whirl.episodes().len(),
+        config.thickness,
+        tolerance
+    );
+    let truth = exact_truth(
+        &mesh,
+        &whirl,
+        config.thickness,
+        config.exclusion_rings,
+        config.thickness + 2.0 * tolerance,
+    );
+    let mut counts: Vec<usize> = settings.sweep.clone().unwrap_or_default();
+    if !counts.contains(&settings.pairs) {
+        counts.push(settings.pairs);
+        counts.sort_unstable();
+    }
+    let mut results = Vec::new();
+    for (i, &n) in counts.iter().enumerate() {
+        let cfg = TrackerConfig {
+            pairs_per_frame: n,
+            ..config.clone()
+        };
+        results.push(run_tracker(&mesh, &whirl, &truth, cfg, tolerance));
+        progress("tracker sweep", i + 1, counts.len());
+    }
+    let main_run = results
+        .iter()
+        .find(|r| r.pairs_per_frame == settings.pairs)
+        .cloned()
+        .unwrap_or_default();
+
+    println!(
+        "{:>8} {:>8} {:>8} {:>8} {:>9} {:>12} {:>12} {:>7}",
+        "pairs/f", "recall", "false", "regions", "lat.p95", "tracker µs", "exact µs", "ratio"
+    );
+    for r in &results {
+        println!(
+            "{:>8} {:>8.3} {:>8.3} {:>8} {:>9.1} {:>12.0} {:>12.0} {:>7.3}",
+            r.pairs_per_frame,
+            r.recall,
+            r.false_contact_rate,
+            r.regions,
+            r.latency_p95,
+            r.tracker_us,
+            r.exact_us,
+            r.tracker_us / r.exact_us.max(1e-9)
+        );
+    }
+
+    if let Err(e) = std::fs::create_dir_all(&settings.out_dir) {
+        eprintln!(
+            "tracking_quality: cannot create {}: {e}",
+            settings.out_dir.display()
+        );
+        std::process::exit(1);
+    }
+    let mut csv = String::from(
+        "frame,exact_pairs,exact_regions,tracker_contacts,false_contacts,active_pairs,regions_hit,tracker_us,exact_us\n",
+    );
+    for (f, (exact, row)) in truth.frames.iter().zip(&main_run.per_frame).enumerate() {
+        let _ = writeln!(
+            csv,
+            "{f},{},{},{},{},{},{},{:.1},{:.1}",
+            exact.pairs,
+            exact.regions.len(),
+            row.0,
+            row.1,
+            row.2,
+            row.4,
+            row.3,
+            exact.us
+        );
+    }
+    let mut sweep_csv = String::from(
+        "pairs_per_frame,recall,false_contact_rate,regions,latency_frames_p95,tracker_us_per_frame,exact_us_per_frame\n",
+    );
+    for r in &results {
+        let _ = writeln!(
+            sweep_csv,
+            "{},{:.4},{:.4},{},{:.1},{:.1},{:.1}",
+            r.pairs_per_frame,
+            r.recall,
+            r.false_contact_rate,
+            r.regions,
+            r.latency_p95,
+            r.tracker_us,
+            r.exact_us
+        );
+    }
+    let write = |file: &str, text: &str| {
+        let path = settings.out_dir.join(file);
+        if let Err(e) = std::fs::write(&path, text) {
+            eprintln!("tracking_quality: cannot write {}: {e}", path.display());
+            std::process::exit(1);
+        }
+    };
+    write("frames.csv", &csv);
+    write("sweep.csv", &sweep_csv);
+    let curve = |y: fn(&RunResult) -> f64| -> Vec<(f64, f64)> {
+        results
+            .iter()
+            .map(|r| (r.pairs_per_frame as f64, y(r)))
+            .collect()
+    };
+    let recall = curve(|r| r.recall);
+    let false_rate = curve(|r| r.false_contact_rate);
+    let tracker_t = curve(|r| r.tracker_us / 1000.0);
+    let exact_t = curve(|r| r.exact_us / 1000.0);
+    let budget_t = curve(|r| 0.2 * r.exact_us / 1000.0);
+    let recall_target = curve(|_| 0.95);
+    let title = format!(
+        "{}: {} triangles",
+        name.rsplit('/').next().unwrap_or(&name),
+        mesh.triangle_count()
+    );
+    let plots = [
+        plot(
+            &settings.out_dir.join("recall_vs_pairs.svg"),
+            &format!("Recall within 3 frames — {title}"),
+            "fraction",
+            &[
+                ("recall", recall, RGBColor(31, 119, 180)),
+                ("false contact rate", false_rate, RGBColor(214, 39, 40)),
+                ("target recall 0.95", recall_target, RGBColor(150, 150, 150)),
+            ],
+        ),
+        plot(
+            &settings.out_dir.join("time_vs_pairs.svg"),
+            &format!("Time per frame — {title}"),
+            "ms per frame (thread CPU time)",
+            &[
+                ("tracker", tracker_t, RGBColor(31, 119, 180)),
+                ("exact self pass", exact_t, RGBColor(44, 160, 44)),
+                ("target: 0.2 × exact", budget_t, RGBColor(150, 150, 150)),
+            ],
+        ),
+    ];
+    for p in plots {
+        if let Err(e) = p {
+            eprintln!("tracking_quality: plot failed: {e}");
+            std::process::exit(1);
+        }
+    }
+    let sweep_json: Vec<String> = results
+        .iter()
+        .map(|r| format!("{{{}}}", json_run(r)))
+        .collect();
+    let json = format!(
+        "{{\"mesh\": \"{}\", \"triangles\": {}, \"frames\": {}, \"seed\": {}, \"thickness\": {}, \"tolerance\": {}, {}, \"sweep\": [{}]}}\n",
+        name.replace('\\', "\\\\").replace('"', "\\\""),
+        mesh.triangle_count(),
+        settings.frames,
+        settings.seed,
+        config.thickness,
+        tolerance,
+        json_run(&main_run),
+        sweep_json.join(", ")
+    );
+    if let Some(path) = &settings.json
+        && let Err(e) = std::fs::write(path, &json)
+    {
+        eprintln!("tracking_quality: cannot write {}: {e}", path.display());
+        std::process::exit(1);
+    }
+    println!(
+        "wrote {}/{{frames.csv, sweep.csv, recall_vs_pairs.svg, time_vs_pairs.svg}}",
+        settings.out_dir.display()
+    );
+}

@@ -1,0 +1,95 @@
+//! Parameters of a [`Tracker`](super::Tracker).
+
+/// How new random feature pairs are drawn each frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Sampling {
+    /// Both features uniformly over the surfaces' (rest) area.
+    Uniform,
+    /// Over area weighted by how far the triangles moved since the last frame
+    /// (importance-driven: fast-moving parts make new contacts).
+    Velocity,
+    /// Kimmerle et al.: only inside overlapping patch pairs of the incomplete hierarchy
+    /// (plus a quarter of the samples uniform, for contacts between adjacent patches).
+    #[default]
+    Hierarchy,
+}
+
+/// The local search that moves a pair to a locally closest pair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SearchMode {
+    /// Every combination of a neighbour on each side: `O(n·m)` per step.
+    Full,
+    /// Raghupathi et al.: improve the first feature with the second fixed, then the second
+    /// with the new first fixed: `O(n + m)` per step.
+    #[default]
+    TwoStep,
+}
+
+/// Parameters of a [`Tracker`](super::Tracker).
+///
+/// Distances are in the meshes' units. [`TrackerConfig::for_surface`] picks thickness and
+/// thresholds from a mesh's own edge length and size.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackerConfig {
+    /// New random pairs per frame (the papers' `n`): the cost of a frame grows linearly with
+    /// it, and so does the chance of finding a new contact region.
+    pub pairs_per_frame: usize,
+    /// Where new pairs come from.
+    pub sampling: Sampling,
+    /// Local search variant.
+    pub search: SearchMode,
+    /// Largest number of steps of one pair's local search per frame.
+    pub max_iterations: u32,
+    /// Contact distance: the sum of the two surfaces' radii `r_a + r_b`. Pairs closer than
+    /// this (or intersecting) are contacts. 0 reports intersections only.
+    pub thickness: f32,
+    /// Guy and Debunne's `k`: pairs farther than `k·d_min + ε` are dropped.
+    pub far_factor: f32,
+    /// Guy and Debunne's `ε`, as a fraction of the object size (box diagonal).
+    pub far_epsilon: f32,
+    /// Self-collision ignores pairs of triangles within this many vertex rings of each other
+    /// (0: sharing a vertex; 1, the default: also joined by an edge). On irregular meshes,
+    /// triangles one ring apart can be closer than a tenth of an edge without any fold.
+    pub exclusion_rings: u32,
+    /// Two pairs whose features are within this many vertex rings of each other, on both
+    /// sides, are redundant: the farther one is dropped. Topological, so that the two walls
+    /// of a thin fold stay distinct contacts.
+    pub redundancy_rings: u32,
+    /// Largest number of pairs kept between frames (the closest are kept).
+    pub max_active_pairs: usize,
+    /// Largest number of contacts added per frame by collision propagation (searching the
+    /// neighbourhood of each contact for further contacts); 0 disables propagation.
+    pub propagation_limit: usize,
+    /// Seed of the random pair generator (the tracker's stream is also keyed by the frame).
+    pub seed: u64,
+}
+
+impl Default for TrackerConfig {
+    fn default() -> Self {
+        TrackerConfig {
+            pairs_per_frame: 64,
+            sampling: Sampling::default(),
+            search: SearchMode::default(),
+            max_iterations: 16,
+            thickness: 0.0,
+            far_factor: 1.2,
+            far_epsilon: 0.01,
+            exclusion_rings: 2,
+            redundancy_rings: 2,
+            max_active_pairs: 1024,
+            propagation_limit: 256,
+            seed: 0x5EED,
+        }
+    }
+}
+
+impl TrackerConfig {
+    /// Defaults with a thickness of a tenth of `surface`'s mean edge length: thin enough that
+    /// triangles two rings apart on a smooth surface are not in contact.
+    pub fn for_surface(surface: &super::TrackedSurface) -> Self {
+        TrackerConfig {
+            thickness: 0.1 * surface.mean_edge_length(),
+            ..Self::default()
+        }
+    }
+}

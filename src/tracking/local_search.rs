@@ -1,0 +1,372 @@
+//! Local search: move a triangle pair to a locally closest pair by strict descent over the
+//! neighbours that the mesh topology gives, with a deterministic tie-break.
+
+use glam::DVec3;
+use smallvec::SmallVec;
+
+use super::config::SearchMode;
+use super::feature::{Feature, reduce_to_feature};
+use super::surface::Placed;
+use crate::geometry::{ClosestPoints, closest_points_triangle_triangle};
+use crate::mesh::Topology;
+
+/// Where a pair's search ended.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Located {
+    pub ta: u32,
+    pub tb: u32,
+    pub cp: ClosestPoints,
+    pub fa: Feature,
+    pub fb: Feature,
+}
+
+/// Counters of one frame's searches.
+#[derive(Debug, Default, Clone, Copy)]
+pub(crate) struct SearchCounters {
+    pub iterations: u64,
+    pub evaluations: u64,
+}
+
+/// Two triangles of one mesh that share a vertex.
+#[inline]
+pub(crate) fn adjacent(a: [u32; 3], b: [u32; 3]) -> bool {
+    a.iter().any(|v| b.contains(v))
+}
+
+/// Whether triangles `a` and `b` of a mesh with `topology` are within `rings` edge steps of
+/// each other: with 0 they share a vertex; with 1 they share a vertex or an edge joins a
+/// vertex of one to a vertex of the other; and so on. Self-collision excludes such pairs.
+pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rings: u32) -> bool {
+    if adjacent(a, b) {
+        return true;
+    }
+    match rings {
+        0 => false,
+        1 => a
+            .iter()
+            .any(|&v| topology.vertex_neighbours(v).iter().any(|w| b.contains(w))),
+        2 => {
+            // Within two steps: some vertex of `a` and some vertex of `b` are neighbours or
+            // share a neighbour (a merge of two ascending lists).
+            a.iter().any(|&v| {
+                let nv = topology.vertex_neighbours(v);
+                b.iter().any(|&u| {
+                    let nu = topology.vertex_neighbours(u);
+                    if nv.binary_search(&u).is_ok() {
+                        return true;
+                    }
+                    let (mut i, mut j) = (0, 0);
+                    while i < nv.len() && j < nu.len() {
+                        match nv[i].cmp(&nu[j]) {
+                            std::cmp::Ordering::Less => i += 1,
+                            std::cmp::Ordering::Greater => j += 1,
+                            std::cmp::Ordering::Equal => return true,
+                        }
+                    }
+                    false
+                })
+            })
+        }
+        _ => {
+            let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
+            let mut frontier: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
+            for _ in 0..rings {
+                let mut next: SmallVec<[u32; 64]> = SmallVec::new();
+                for &v in &frontier {
+                    for &w in topology.vertex_neighbours(v) {
+                        if b.contains(&w) {
+                            return true;
+                        }
+                        if !seen.contains(&w) {
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                frontier = next;
+            }
+            false
+        }
+    }
+}
+
+fn bounds(t: &[DVec3; 3]) -> (DVec3, DVec3) {
+    (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
+}
+
+/// A lower bound of the distance of two triangles: the gap of their boxes.
+#[inline]
+fn box_gap(a: &(DVec3, DVec3), b: &(DVec3, DVec3)) -> f64 {
+    (a.0 - b.1).max(b.0 - a.1).max(DVec3::ZERO).length()
+}
+
+pub(crate) struct Searcher<'a> {
+    pub a: Placed<'a>,
+    pub b: Placed<'a>,
+    /// One mesh against itself: adjacent triangles are excluded.
+    pub self_mode: bool,
+    pub mode: SearchMode,
+    pub max_iterations: u32,
+    /// Strict-decrease margin (absolute).
+    pub epsilon: f64,
+    /// Contact distance: self pairs within it are never treated as sliding.
+    pub thickness: f64,
+    /// Self pairs within this many rings are excluded (see [`triangles_within_rings`]).
+    pub exclusion_rings: u32,
+    /// A sliding self pair farther than this stops its descent at once (closer, it goes on:
+    /// it may be at a tight crease whose two sides touch just beyond the excluded zone).
+    pub slide_limit: f64,
+}
+
+/// A candidate pair with its corners and closest points.
+type Candidate = (u32, u32, [DVec3; 3], [DVec3; 3], ClosestPoints);
+
+/// Outcome of one descent step.
+enum Step {
+    Moved(Located),
+    Stuck,
+    /// A self pair whose neighbourhood touches its partner: it slides along the sheet.
+    Sliding,
+}
+
+impl Searcher<'_> {
+    pub fn excluded(&self, ta: u32, tb: u32) -> bool {
+        self.self_mode
+            && (ta == tb
+                || triangles_within_rings(
+                    self.a.topology(),
+                    self.a.corners(ta),
+                    self.b.corners(tb),
+                    self.exclusion_rings,
+                ))
+    }
+
+    pub fn locate(&self, ta: u32, tb: u32, counters: &mut SearchCounters) -> Located {
+        counters.evaluations += 1;
+        let (a, b) = (self.a.triangle(ta), self.b.triangle(tb));
+        let cp = closest_points_triangle_triangle(&a, &b);
+        self.located(ta, tb, &a, &b, cp)
+    }
+
+    fn located(
+        &self,
+        ta: u32,
+        tb: u32,
+        a: &[DVec3; 3],
+        b: &[DVec3; 3],
+        cp: ClosestPoints,
+    ) -> Located {
+        let fa = reduce_to_feature(cp.point_a, ta, a, self.a.corners(ta), self.a.topology());
+        let fb = reduce_to_feature(cp.point_b, tb, b, self.b.corners(tb), self.b.topology());
+        Located { ta, tb, cp, fa, fb }
+    }
+
+    /// Triangles to try instead of `t`, whose closest feature is `f`: around a closest corner
+    /// or edge, all triangles at those corners; from a face, the edge-adjacent triangles.
+    fn candidates(side: &Placed, t: u32, f: Feature, out: &mut SmallVec<[u32; 48]>) {
+        out.clear();
+        let topo = side.topology();
+        match f {
+            Feature::Vertex(v) => out.extend_from_slice(topo.vertex_triangles(v)),
+            Feature::Edge(e) => {
+                let [v0, v1] = topo.edge(e).vertices;
+                out.extend_from_slice(topo.vertex_triangles(v0));
+                out.extend_from_slice(topo.vertex_triangles(v1));
+                out.sort_unstable();
+                out.dedup();
+            }
+            Feature::Triangle(_) => out.extend_from_slice(topo.triangle_neighbours(t)),
+        }
+        out.retain(|x| *x != t);
+    }
+
+    /// Strict descent from `(ta, tb)` until no neighbour pair is closer by more than
+    /// `epsilon`, the pair is in contact (within the thickness), or `max_iterations` steps. Ties keep the first (ascending) candidate.
+    /// Returns where it stopped and whether it stopped because the pair was sliding (a self
+    /// pair farther than the thickness whose neighbourhood touches its partner: descent from
+    /// it slides along the sheet into the excluded zone instead of across a gap, so it is not
+    /// a contact between distinct parts of the surface).
+    pub fn descend(&self, start: Located, counters: &mut SearchCounters) -> (Located, bool) {
+        let mut cur = start;
+        let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
+        let mut cb: SmallVec<[u32; 48]> = SmallVec::new();
+        for _ in 0..self.max_iterations {
+            if cur.cp.distance <= self.thickness {
+                // In contact (nothing is strictly closer than touching): propagation explores
+                // the neighbourhood.
+                break;
+            }
+            counters.iterations += 1;
+            let mut moved = false;
+            match self.mode {
+                SearchMode::TwoStep => {
+                    Self::candidates(&self.a, cur.ta, cur.fa, &mut ca);
+                    match self.best_of(&cur, ca.iter().map(|&x| (x, cur.tb)), counters) {
+                        Step::Moved(n) => (cur, moved) = (n, true),
+                        Step::Sliding => return (cur, true),
+                        Step::Stuck => {}
+                    }
+                    Self::candidates(&self.b, cur.tb, cur.fb, &mut cb);
+                    match self.best_of(&cur, cb.iter().map(|&y| (cur.ta, y)), counters) {
+                        Step::Moved(n) => (cur, moved) = (n, true),
+                        Step::Sliding => return (cur, true),
+                        Step::Stuck => {}
+                    }
+                }
+                SearchMode::Full => {
+                    Self::candidates(&self.a, cur.ta, cur.fa, &mut ca);
+                    Self::candidates(&self.b, cur.tb, cur.fb, &mut cb);
+                    ca.insert(0, cur.ta);
+                    cb.insert(0, cur.tb);
+                    let pairs = ca
+                        .iter()
+                        .flat_map(|&x| cb.iter().map(move |&y| (x, y)))
+                        .filter(|&p| p != (cur.ta, cur.tb));
+                    match self.best_of(&cur, pairs, counters) {
+                        Step::Moved(n) => (cur, moved) = (n, true),
+                        Step::Sliding => return (cur, true),
+                        Step::Stuck => {}
+                    }
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        (cur, false)
+    }
+
+    /// The candidate strictly closer than `cur` by more than `epsilon` (the closest; the
+    /// first of equals), skipping excluded pairs and those whose boxes are already too far.
+    fn best_of(
+        &self,
+        cur: &Located,
+        candidates: impl Iterator<Item = (u32, u32)>,
+        counters: &mut SearchCounters,
+    ) -> Step {
+        let mut best_d = cur.cp.distance - self.epsilon;
+        let mut best: Option<Candidate> = None;
+        let may_slide = self.self_mode && cur.cp.distance > self.thickness;
+        let mut closest_excluded = f64::INFINITY;
+        // Separation along the current closest direction bounds every candidate's distance
+        // from below: the gap between the two triangles' projections on it.
+        let gap = cur.cp.point_b - cur.cp.point_a;
+        let dir = if cur.cp.distance > 0.0 {
+            gap / gap.length()
+        } else {
+            DVec3::ZERO
+        };
+        for (x, y) in candidates {
+            let excluded = self.excluded(x, y);
+            if excluded && !may_slide {
+                continue;
+            }
+            let (a, b) = (self.a.triangle(x), self.b.triangle(y));
+            let bound = if excluded {
+                closest_excluded.min(best_d)
+            } else {
+                best_d
+            };
+            if box_gap(&bounds(&a), &bounds(&b)) >= bound {
+                continue;
+            }
+            if dir != DVec3::ZERO {
+                let max_a = a
+                    .iter()
+                    .map(|p| p.dot(dir))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                let min_b = b.iter().map(|q| q.dot(dir)).fold(f64::INFINITY, f64::min);
+                if min_b - max_a >= bound {
+                    continue;
+                }
+            }
+            counters.evaluations += 1;
+            let cp = closest_points_triangle_triangle(&a, &b);
+            if excluded {
+                closest_excluded = closest_excluded.min(cp.distance);
+            } else if cp.distance < best_d {
+                best_d = cp.distance;
+                best = Some((x, y, a, b, cp));
+            }
+        }
+        // The descent would rather step into the excluded zone than across a gap: the pair
+        // slides along the sheet. Far from contact, give up at once; near it, go on among the
+        // allowed neighbours, which may reach a contact at a tight crease.
+        if closest_excluded < best_d && cur.cp.distance > self.slide_limit {
+            return Step::Sliding;
+        }
+        match best {
+            Some((x, y, a, b, cp)) => Step::Moved(self.located(x, y, &a, &b, cp)),
+            None => Step::Stuck,
+        }
+    }
+
+    /// Whether a self pair farther than `slide_limit` would step into the excluded zone: some
+    /// excluded neighbour pair is strictly closer than it (see [`Searcher::descend`]). Closer
+    /// pairs are kept: they may be the two sides of a fold closing up, followed until they
+    /// touch.
+    pub fn sliding(&self, l: &Located) -> bool {
+        if !self.self_mode || l.cp.distance <= self.slide_limit {
+            return false;
+        }
+        let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
+        let mut cb: SmallVec<[u32; 48]> = SmallVec::new();
+        Self::candidates(&self.a, l.ta, l.fa, &mut ca);
+        Self::candidates(&self.b, l.tb, l.fb, &mut cb);
+        let closer = |x: u32, y: u32| {
+            self.excluded(x, y)
+                && closest_points_triangle_triangle(&self.a.triangle(x), &self.b.triangle(y))
+                    .distance
+                    < l.cp.distance - self.epsilon
+        };
+        ca.iter().any(|&x| closer(x, l.tb)) || cb.iter().any(|&y| closer(l.ta, y))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn ring_fast_paths_agree_with_the_search() {
+        let mesh = generate::torus(1.0, 0.3, 24, 12);
+        let topo = Topology::new(&mesh);
+        let tris = mesh.triangles();
+        // The general breadth-first path, for reference.
+        let slow = |a: [u32; 3], b: [u32; 3], rings: u32| {
+            let mut seen: Vec<u32> = a.to_vec();
+            let mut frontier = seen.clone();
+            if a.iter().any(|v| b.contains(v)) {
+                return true;
+            }
+            for _ in 0..rings {
+                let mut next = Vec::new();
+                for &v in &frontier {
+                    for &w in topo.vertex_neighbours(v) {
+                        if b.contains(&w) {
+                            return true;
+                        }
+                        if !seen.contains(&w) {
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                frontier = next;
+            }
+            false
+        };
+        for i in (0..tris.len()).step_by(7) {
+            for j in 0..tris.len() {
+                for rings in 0..4 {
+                    assert_eq!(
+                        triangles_within_rings(&topo, tris[i], tris[j], rings),
+                        slow(tris[i], tris[j], rings),
+                        "{i} {j} {rings}"
+                    );
+                }
+            }
+        }
+    }
+}

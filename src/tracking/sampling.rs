@@ -1,0 +1,402 @@
+//! Drawing new random triangle pairs: uniform over area, velocity-weighted, or inside the
+//! overlapping patch pairs of the incomplete hierarchy (Kimmerle et al.).
+
+use rand::RngExt;
+use rand::rngs::Xoshiro256PlusPlus;
+
+use super::config::Sampling;
+use super::local_search::{adjacent, triangles_within_rings};
+use super::patch_tree::{box_transform, random_leaf_pair};
+use super::surface::{Placed, TrackedSurface};
+use crate::geometry::closest_points_triangle_triangle;
+use glam::Vec3;
+
+/// Scratch memory of the samplers, reused across frames.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct SamplerScratch {
+    stack: Vec<(u32, u32)>,
+    overlaps: Vec<(u32, u32)>,
+    covered: std::collections::HashSet<(u32, u32)>,
+    known_triangles: std::collections::HashSet<u32>,
+    near_known: Vec<bool>,
+    /// Crease probe candidates: (sharpness key, edge, collapsed rather than folded).
+    sharp: Vec<(f32, u32, bool)>,
+    ring: Vec<u32>,
+    local: Vec<u32>,
+    boxes: Vec<([glam::DVec3; 3], glam::DVec3, glam::DVec3)>,
+    cdf_a: Vec<f64>,
+    cdf_b: Vec<f64>,
+    /// Overlapping patch pairs found this frame.
+    pub overlap_count: usize,
+}
+
+/// Fraction of hierarchy-driven samples drawn uniformly instead (contacts between adjacent
+/// patches, which the hierarchy skips in self-collision).
+const UNIFORM_SHARE: f64 = 0.25;
+
+/// One sample in this many is spent on a crease probe (self-collision).
+const CREASE_SHARE: usize = 4;
+
+/// Edges shorter than this fraction of their rest length are collapsed: crease probe
+/// candidates, like edges folded past 90°.
+const COLLAPSED: f32 = 0.3;
+
+/// Crease probes go to random edges among this many times as many of the sharpest.
+const PROBE_POOL: usize = 4;
+
+/// Triangles on the two sides of a crease face each other: normals past 120° apart.
+const CREASE_COS: f32 = -0.5;
+
+/// Candidate patch pairs tried per sample: a random descent below a pair can dead-end (its
+/// subtrees are apart at a finer level), and then another pair is drawn.
+const DESCENT_TRIES: usize = 8;
+
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn draw(
+    sampling: Sampling,
+    n: usize,
+    a: &Placed,
+    b: &Placed,
+    self_mode: bool,
+    exclusion_rings: u32,
+    thickness: f32,
+    margin: f32,
+    known: impl Iterator<Item = (u32, u32)>,
+    rng: &mut Xoshiro256PlusPlus,
+    scratch: &mut SamplerScratch,
+    out: &mut Vec<(u32, u32)>,
+) {
+    scratch.overlap_count = 0;
+    if n == 0 {
+        return;
+    }
+    match sampling {
+        Sampling::Uniform => uniform(n, a, b, self_mode, rng, out),
+        Sampling::Velocity => {
+            velocity_cdf(a.surface, &mut scratch.cdf_a);
+            if !self_mode {
+                velocity_cdf(b.surface, &mut scratch.cdf_b);
+            }
+            let cdf_b = if self_mode {
+                &scratch.cdf_a
+            } else {
+                &scratch.cdf_b
+            };
+            for _ in 0..n {
+                for _ in 0..4 {
+                    let ta = pick(&scratch.cdf_a, rng.random::<f64>());
+                    let tb = pick(cdf_b, rng.random::<f64>());
+                    if !self_mode || (ta != tb && !adjacent(a.corners(ta), b.corners(tb))) {
+                        out.push((ta, tb));
+                        break;
+                    }
+                }
+            }
+        }
+        Sampling::Hierarchy => {
+            scratch.overlaps.clear();
+            if self_mode {
+                a.surface
+                    .patches
+                    .self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
+            } else if let Some(rel) = &b.pose {
+                a.surface.patches.pair_overlaps(
+                    &b.surface.patches,
+                    rel,
+                    margin,
+                    &mut scratch.stack,
+                    &mut scratch.overlaps,
+                );
+            }
+            scratch.overlap_count = scratch.overlaps.len();
+            // Patch pairs that already hold a contact are followed by its pair and by
+            // propagation: new samples go where no contact is known yet.
+            scratch.covered.clear();
+            scratch.known_triangles.clear();
+            let (of_a, of_b) = (&a.surface.patches.patch_of, &b.surface.patches.patch_of);
+            for (ta, tb) in known {
+                scratch.known_triangles.insert(ta);
+                scratch.known_triangles.insert(tb);
+                let (x, y) = (of_a[ta as usize], of_b[tb as usize]);
+                scratch.covered.insert(if self_mode {
+                    (x.min(y), x.max(y))
+                } else {
+                    (x, y)
+                });
+            }
+            if !scratch.covered.is_empty() {
+                let covered = &scratch.covered;
+                scratch.overlaps.retain(|p| !covered.contains(p));
+            }
+            let uniform_n = if self_mode {
+                (n as f64 * UNIFORM_SHARE).round() as usize
+            } else {
+                0
+            };
+            uniform(uniform_n, a, b, self_mode, rng, out);
+            if scratch.overlaps.is_empty() {
+                // No two non-adjacent patches (or, for two meshes, no two patches at all)
+                // come within the margin: contacts elsewhere are impossible.
+                return;
+            }
+            let mut budget = n - uniform_n;
+            if self_mode {
+                budget -= crease_probes(
+                    n / CREASE_SHARE,
+                    a,
+                    exclusion_rings,
+                    thickness,
+                    rng,
+                    scratch,
+                    out,
+                )
+                .min(budget);
+            }
+            let xf = b.pose.as_ref().map(box_transform);
+            let (bvh_a, bvh_b) = (&a.surface.patches.bvh, &b.surface.patches.bvh);
+            for _ in 0..budget {
+                for _ in 0..DESCENT_TRIES {
+                    let (pa, pb) = scratch.overlaps[rng.random_range(0..scratch.overlaps.len())];
+                    let na = a.surface.patches.patches[pa as usize].node;
+                    let nb = b.surface.patches.patches[pb as usize].node;
+                    let Some((la, lb)) =
+                        random_leaf_pair(bvh_a, bvh_b, xf.as_ref(), na, nb, margin, rng)
+                    else {
+                        continue;
+                    };
+                    let (ts_a, ts_b) = (
+                        bvh_a.triangles_of(&bvh_a.nodes()[la as usize]),
+                        bvh_b.triangles_of(&bvh_b.nodes()[lb as usize]),
+                    );
+                    let exclusion = self_mode.then_some(exclusion_rings);
+                    if let Some(pair) = best_in_leaves(ts_a, ts_b, a, b, exclusion, rng) {
+                        out.push(pair);
+                        break;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The closest pair of triangles of two leaves (not excluded in self-collision), if any: a
+/// start on the right side of a fold, where a random pick would often start on the same side
+/// and slide. Ties keep the first in a random order.
+fn best_in_leaves(
+    ts_a: &[u32],
+    ts_b: &[u32],
+    a: &Placed,
+    b: &Placed,
+    exclusion: Option<u32>,
+    rng: &mut Xoshiro256PlusPlus,
+) -> Option<(u32, u32)> {
+    let (oa, ob) = (
+        rng.random_range(0..ts_a.len()),
+        rng.random_range(0..ts_b.len()),
+    );
+    let mut best: Option<(f64, u32, u32)> = None;
+    for i in 0..ts_a.len() {
+        let ta = ts_a[(oa + i) % ts_a.len()];
+        let tri_a = a.triangle(ta);
+        let (lo_a, hi_a) = (
+            tri_a[0].min(tri_a[1]).min(tri_a[2]),
+            tri_a[0].max(tri_a[1]).max(tri_a[2]),
+        );
+        for j in 0..ts_b.len() {
+            let tb = ts_b[(ob + j) % ts_b.len()];
+            if let Some(rings) = exclusion
+                && (ta == tb
+                    || triangles_within_rings(a.topology(), a.corners(ta), b.corners(tb), rings))
+            {
+                continue;
+            }
+            let tri_b = b.triangle(tb);
+            let (lo_b, hi_b) = (
+                tri_b[0].min(tri_b[1]).min(tri_b[2]),
+                tri_b[0].max(tri_b[1]).max(tri_b[2]),
+            );
+            let gap = (lo_a - hi_b)
+                .max(lo_b - hi_a)
+                .max(glam::DVec3::ZERO)
+                .length();
+            if best.is_some_and(|(d, _, _)| gap >= d) {
+                continue;
+            }
+            let d = closest_points_triangle_triangle(&tri_a, &tri_b).distance;
+            if best.is_none_or(|(e, _, _)| d < e) {
+                best = Some((d, ta, tb));
+            }
+        }
+    }
+    best.map(|(_, ta, tb)| (ta, tb))
+}
+
+/// Crease probes (self-collision): around `count` edges drawn among the sharpest folded ones
+/// (dihedral fold past 90°) or most collapsed ones (shorter than 30 % of their rest length)
+/// that are not next to a known contact, every pair of triangles within two vertex rings
+/// of the edge, facing each other (normals past 120° apart) and closer than the thickness,
+/// becomes a start. A surface folding onto
+/// itself first touches just beyond the excluded zone, next to a sharp edge, where random
+/// starts mostly slide along the sheet. Returns the number of probes made.
+#[allow(clippy::too_many_arguments)]
+fn crease_probes(
+    count: usize,
+    a: &Placed,
+    exclusion_rings: u32,
+    thickness: f32,
+    rng: &mut Xoshiro256PlusPlus,
+    scratch: &mut SamplerScratch,
+    out: &mut Vec<(u32, u32)>,
+) -> usize {
+    let topo = a.topology();
+    let normals = &a.surface.normals;
+    // Vertices within a ring of a known contact: creases there are being followed.
+    scratch.near_known.clear();
+    scratch.near_known.resize(topo.vertex_count(), false);
+    for &t in &scratch.known_triangles {
+        for v in a.corners(t) {
+            scratch.near_known[v as usize] = true;
+            for &w in topo.vertex_neighbours(v) {
+                scratch.near_known[w as usize] = true;
+            }
+        }
+    }
+    scratch.sharp.clear();
+    for (e, edge) in topo.edges().iter().enumerate() {
+        if let [t0, t1, ..] = edge.triangles[..] {
+            let [v0, v1] = edge.vertices;
+            // Folded: the normals' cosine. Collapsed (squeezed along the surface): the
+            // remaining fraction of the rest length, mapped to [-1, 0) below `COLLAPSED`.
+            let fold = if normals[t0 as usize] != Vec3::ZERO && normals[t1 as usize] != Vec3::ZERO {
+                normals[t0 as usize].dot(normals[t1 as usize])
+            } else {
+                1.0
+            };
+            let rest = a.surface.rest_edge_lengths[e];
+            let now = (a.surface.mesh().positions()[v0 as usize]
+                - a.surface.mesh().positions()[v1 as usize])
+                .length();
+            let collapse = if rest > 0.0 {
+                now / rest / COLLAPSED - 1.0
+            } else {
+                1.0
+            };
+            let c = fold.min(collapse);
+            if c < 0.0 && !scratch.near_known[v0 as usize] && !scratch.near_known[v1 as usize] {
+                scratch.sharp.push((c, e as u32, collapse < fold));
+            }
+        }
+    }
+    // `count` edges drawn at random among the `PROBE_POOL · count` sharpest.
+    let sharpest =
+        |x: &(f32, u32, bool), y: &(f32, u32, bool)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+    let pool = count.saturating_mul(PROBE_POOL);
+    if scratch.sharp.len() > pool {
+        scratch.sharp.select_nth_unstable_by(pool, sharpest);
+        scratch.sharp.truncate(pool);
+    }
+    scratch.sharp.sort_unstable_by(sharpest);
+    for i in 0..count.min(scratch.sharp.len()) {
+        let j = rng.random_range(i..scratch.sharp.len());
+        scratch.sharp.swap(i, j);
+    }
+    scratch.sharp.truncate(count);
+    let h = thickness.max(0.0) as f64;
+    let probes = scratch.sharp.len();
+    for i in 0..probes {
+        let (_, edge, collapsed) = scratch.sharp[i];
+        let [v0, v1] = topo.edge(edge).vertices;
+        // Triangles within two rings of the edge.
+        scratch.ring.clear();
+        scratch.ring.extend([v0, v1]);
+        let mut start = 0;
+        for _ in 0..2 {
+            let end = scratch.ring.len();
+            for k in start..end {
+                for &w in topo.vertex_neighbours(scratch.ring[k]) {
+                    if !scratch.ring.contains(&w) {
+                        scratch.ring.push(w);
+                    }
+                }
+            }
+            start = end;
+        }
+        scratch.local.clear();
+        for &v in &scratch.ring {
+            scratch.local.extend_from_slice(topo.vertex_triangles(v));
+        }
+        scratch.local.sort_unstable();
+        scratch.local.dedup();
+        scratch.boxes.clear();
+        scratch.boxes.extend(scratch.local.iter().map(|&t| {
+            let x = a.triangle(t);
+            (x, x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
+        }));
+        for (k, &(x, lo_x, hi_x)) in scratch.boxes.iter().enumerate() {
+            let (t, n_t) = (scratch.local[k], normals[scratch.local[k] as usize]);
+            for (j, &(y, lo_y, hi_y)) in scratch.boxes.iter().enumerate().skip(k + 1) {
+                let u = scratch.local[j];
+                // The two sides of a fold face each other (a squeezed sheet meets itself
+                // edge-on or flat, in any orientation).
+                if !collapsed && n_t.dot(normals[u as usize]) >= CREASE_COS {
+                    continue;
+                }
+                if (lo_x - hi_y).max(lo_y - hi_x).max_element() > h
+                    || triangles_within_rings(topo, a.corners(t), a.corners(u), exclusion_rings)
+                {
+                    continue;
+                }
+                if closest_points_triangle_triangle(&x, &y).distance <= h {
+                    out.push((t, u));
+                }
+            }
+        }
+    }
+    probes
+}
+
+fn uniform(
+    n: usize,
+    a: &Placed,
+    b: &Placed,
+    self_mode: bool,
+    rng: &mut Xoshiro256PlusPlus,
+    out: &mut Vec<(u32, u32)>,
+) {
+    for _ in 0..n {
+        for _ in 0..4 {
+            let ta = a.surface.triangle_at_area(rng.random::<f64>());
+            let tb = b.surface.triangle_at_area(rng.random::<f64>());
+            if !self_mode || (ta != tb && !adjacent(a.corners(ta), b.corners(tb))) {
+                out.push((ta, tb));
+                break;
+            }
+        }
+    }
+}
+
+/// Cumulative weights `area · (ε + displacement)`: fast-moving triangles are drawn more.
+fn velocity_cdf(surface: &TrackedSurface, cdf: &mut Vec<f64>) {
+    cdf.clear();
+    let mesh = surface.mesh();
+    let floor = 1e-3 * surface.mean_edge_length() as f64;
+    let mut total = 0.0;
+    for (t, tri) in mesh.triangles().iter().enumerate() {
+        let [p, q, r] = mesh.triangle(t).map(|x| x.as_dvec3());
+        let area = 0.5 * (q - p).cross(r - p).length();
+        let speed = tri
+            .iter()
+            .map(|&v| surface.displacement(v) as f64)
+            .fold(0.0, f64::max);
+        total += area * (floor + speed);
+        cdf.push(total);
+    }
+}
+
+fn pick(cdf: &[f64], u: f64) -> u32 {
+    let total = cdf.last().copied().unwrap_or(0.0);
+    if total.is_nan() || total <= 0.0 {
+        return ((u * cdf.len() as f64) as usize).min(cdf.len().saturating_sub(1)) as u32;
+    }
+    cdf.partition_point(|&c| c <= u * total).min(cdf.len() - 1) as u32
+}

@@ -1,0 +1,182 @@
+//! A mesh prepared for tracking: topology, area sampling table, velocities, patch tree.
+
+use glam::{DVec3, Vec3};
+
+use super::patch_tree::PatchTree;
+use crate::geometry::PoseF64;
+use crate::mesh::{MeshError, Topology, TriMesh};
+
+/// Default largest number of triangles in a patch of the incomplete hierarchy.
+pub const DEFAULT_PATCH_SIZE: u32 = 64;
+
+/// A triangle mesh prepared for stochastic tracking: its [`Topology`] (feature neighbours),
+/// a table for sampling points uniformly over its area, the previous frame's positions (for
+/// velocity-driven sampling), and Kimmerle's incomplete hierarchy (a BVH cut at patches,
+/// refitted on every [`TrackedSurface::set_positions`]).
+///
+/// Deform it in place with [`TrackedSurface::set_positions`] (same triangles); the topology
+/// never changes.
+#[derive(Debug, Clone)]
+pub struct TrackedSurface {
+    mesh: TriMesh,
+    topology: Topology,
+    previous: Vec<Vec3>,
+    area_cdf: Vec<f64>,
+    pub(crate) patches: PatchTree,
+    /// Unit normal of each triangle at the current positions (zero when degenerate).
+    pub(crate) normals: Vec<Vec3>,
+    /// Length of each topology edge as built.
+    pub(crate) rest_edge_lengths: Vec<f32>,
+    mean_edge: f32,
+    size: f32,
+}
+
+impl TrackedSurface {
+    /// Prepares `mesh` with patches of at most [`DEFAULT_PATCH_SIZE`] triangles.
+    pub fn new(mesh: TriMesh) -> Self {
+        Self::with_patch_size(mesh, DEFAULT_PATCH_SIZE)
+    }
+
+    /// Prepares `mesh` with patches of at most `patch_size` triangles (at least 1).
+    pub fn with_patch_size(mesh: TriMesh, patch_size: u32) -> Self {
+        let topology = Topology::new(&mesh);
+        let p = mesh.positions();
+        let edges = topology.edges();
+        let mean_edge = if edges.is_empty() {
+            0.0
+        } else {
+            let sum: f64 = edges
+                .iter()
+                .map(|e| (p[e.vertices[0] as usize] - p[e.vertices[1] as usize]).length() as f64)
+                .sum();
+            (sum / edges.len() as f64) as f32
+        };
+        let size = mesh.aabb().extents().length();
+        let rest_edge_lengths = edges
+            .iter()
+            .map(|e| (p[e.vertices[0] as usize] - p[e.vertices[1] as usize]).length())
+            .collect();
+        let mut area_cdf = Vec::with_capacity(mesh.triangle_count());
+        let mut total = 0.0f64;
+        for t in 0..mesh.triangle_count() {
+            let [a, b, c] = mesh.triangle(t).map(|q| q.as_dvec3());
+            total += 0.5 * (b - a).cross(c - a).length();
+            area_cdf.push(total);
+        }
+        let mut patches = PatchTree::new(&mesh, patch_size);
+        let mut normals = Vec::new();
+        triangle_normals(&mesh, &mut normals);
+        patches.update_cones(&normals);
+        TrackedSurface {
+            previous: mesh.positions().to_vec(),
+            mesh,
+            topology,
+            area_cdf,
+            patches,
+            normals,
+            rest_edge_lengths,
+            mean_edge,
+            size,
+        }
+    }
+
+    /// Moves the vertices (same count, all finite), keeps the old positions as the previous
+    /// frame's, and refits the patch tree (boxes and normal cones). On error nothing changes.
+    pub fn set_positions(&mut self, positions: &[Vec3]) -> Result<(), MeshError> {
+        self.previous.clear();
+        self.previous.extend_from_slice(self.mesh.positions());
+        if let Err(e) = self.mesh.set_positions(positions) {
+            self.previous.clear();
+            self.previous.extend_from_slice(self.mesh.positions());
+            return Err(e);
+        }
+        self.patches.refit(&self.mesh);
+        triangle_normals(&self.mesh, &mut self.normals);
+        self.patches.update_cones(&self.normals);
+        Ok(())
+    }
+
+    /// The mesh at its current positions.
+    pub fn mesh(&self) -> &TriMesh {
+        &self.mesh
+    }
+
+    /// The mesh's adjacency.
+    pub fn topology(&self) -> &Topology {
+        &self.topology
+    }
+
+    /// Mean edge length of the mesh as built (a natural unit for thickness and tolerances).
+    pub fn mean_edge_length(&self) -> f32 {
+        self.mean_edge
+    }
+
+    /// Diagonal of the mesh's box as built (the "object size" of Guy and Debunne's threshold).
+    pub fn size(&self) -> f32 {
+        self.size
+    }
+
+    /// Number of patches of the incomplete hierarchy.
+    pub fn patch_count(&self) -> usize {
+        self.patches.patches.len()
+    }
+
+    /// How far vertex `v` moved since the previous [`TrackedSurface::set_positions`].
+    pub fn displacement(&self, v: u32) -> f32 {
+        (self.mesh.positions()[v as usize] - self.previous[v as usize]).length()
+    }
+
+    /// The triangle containing the area fraction `u ∈ [0, 1)` (uniform over the rest area).
+    pub(crate) fn triangle_at_area(&self, u: f64) -> u32 {
+        let total = self.area_cdf.last().copied().unwrap_or(0.0);
+        if total <= 0.0 {
+            return ((u * self.area_cdf.len() as f64) as usize).min(self.area_cdf.len() - 1) as u32;
+        }
+        let x = u * total;
+        self.area_cdf
+            .partition_point(|&c| c <= x)
+            .min(self.area_cdf.len() - 1) as u32
+    }
+}
+
+/// Unit normals of `mesh`'s triangles (zero for degenerate ones), written to `out`.
+fn triangle_normals(mesh: &TriMesh, out: &mut Vec<Vec3>) {
+    out.clear();
+    out.extend((0..mesh.triangle_count()).map(|t| {
+        let [a, b, c] = mesh.triangle(t);
+        (b - a).cross(c - a).normalize_or_zero()
+    }));
+}
+
+/// A surface seen from a frame: its own (`pose == None`) or another mesh's.
+#[derive(Clone, Copy)]
+pub(crate) struct Placed<'a> {
+    pub surface: &'a TrackedSurface,
+    pub pose: Option<PoseF64>,
+}
+
+impl Placed<'_> {
+    #[inline]
+    pub fn point(&self, v: u32) -> DVec3 {
+        let p = self.surface.mesh.positions()[v as usize];
+        match &self.pose {
+            None => p.as_dvec3(),
+            Some(pose) => pose.transform_point(p),
+        }
+    }
+
+    #[inline]
+    pub fn triangle(&self, t: u32) -> [DVec3; 3] {
+        self.surface.mesh.triangles()[t as usize].map(|v| self.point(v))
+    }
+
+    #[inline]
+    pub fn corners(&self, t: u32) -> [u32; 3] {
+        self.surface.mesh.triangles()[t as usize]
+    }
+
+    #[inline]
+    pub fn topology(&self) -> &Topology {
+        &self.surface.topology
+    }
+}

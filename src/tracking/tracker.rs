@@ -1,0 +1,413 @@
+//! The tracker: persistent feature pairs, updated every frame.
+
+use std::collections::HashSet;
+
+use glam::DVec3;
+use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
+use smallvec::SmallVec;
+
+use super::config::TrackerConfig;
+use super::contact::Contact;
+use super::feature::Feature;
+use super::local_search::{Located, SearchCounters, Searcher};
+use super::pruning::{PruneCounts, PruneScratch, prune};
+use super::sampling::{SamplerScratch, draw};
+use super::surface::{Placed, TrackedSurface};
+use crate::geometry::{ClosestPoints, Pose};
+
+/// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
+/// `Searcher::slide_limit`).
+const SLIDE_LIMIT_EDGES: f64 = 2.0;
+
+/// A tracked pair of locally closest features, persistent across frames.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrackedPair {
+    /// Triangle of the first mesh whose feature is closest.
+    pub triangle_a: u32,
+    /// Triangle of the second mesh (same mesh in self-collision).
+    pub triangle_b: u32,
+    /// Closest feature on the first mesh.
+    pub feature_a: Feature,
+    /// Closest feature on the second mesh.
+    pub feature_b: Feature,
+    /// Their distance at the last step.
+    pub distance: f64,
+    /// Closest point on the first mesh (first mesh's frame for a pair of meshes).
+    pub point_a: DVec3,
+    /// Closest point on the second mesh (same frame).
+    pub point_b: DVec3,
+    /// A vertex of `feature_a` (for ring distances).
+    pub vertex_a: u32,
+    /// A vertex of `feature_b`.
+    pub vertex_b: u32,
+    /// Frames this pair has survived.
+    pub age: u32,
+}
+
+/// The active pairs of one tracker: inline storage for the common case of a few dozen.
+pub type PairList = SmallVec<[TrackedPair; 16]>;
+
+/// What the last [`Tracker`] step did.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct StepStats {
+    /// New random pairs drawn.
+    pub sampled: usize,
+    /// Overlapping patch pairs of the incomplete hierarchy (hierarchy sampling).
+    pub patch_overlaps: usize,
+    /// Local-search steps over all pairs.
+    pub iterations: u64,
+    /// Feature-pair distance evaluations.
+    pub evaluations: u64,
+    /// Pairs dropped, by reason.
+    pub pruned: PruneCounts,
+    /// Active pairs after pruning.
+    pub active: usize,
+    /// Contacts reported (including propagated ones).
+    pub contacts: usize,
+    /// Of which found by propagation.
+    pub propagated: usize,
+}
+
+/// Stochastic closest-feature tracking (Raghupathi et al., Guy and Debunne, Kimmerle et al.)
+/// between two meshes or of one mesh against itself.
+///
+/// Each [`Tracker::step_self`] / [`Tracker::step_pair`] on the current vertex positions:
+/// draws [`TrackerConfig::pairs_per_frame`] new random pairs, moves every pair (new and kept)
+/// to locally closest features, prunes far, duplicate and redundant pairs, and reports the
+/// pairs closer than the thickness as [`Contact`]s, extended by collision propagation. Pairs
+/// persist to the next step (temporal coherence). Randomness comes from the configured seed
+/// and the frame number only, so a run is reproducible whatever thread runs it.
+///
+/// # Example
+/// ```
+/// use stochastic_collision::prelude::*;
+/// use stochastic_collision::tracking::{TrackedSurface, Tracker, TrackerConfig};
+///
+/// // A cloth folded over itself: the half beyond x = 0 is turned over and pushed through.
+/// let flat = generate::cloth_grid(1.0, 1.0, 20, 20);
+/// let mut cloth = TrackedSurface::new(flat.clone());
+/// let folded: Vec<Vec3> = flat
+///     .positions()
+///     .iter()
+///     .map(|p| if p.x > 0.1 { Vec3::new(0.2 - p.x, 0.05 - 0.2 * (p.x - 0.1), p.z) } else { *p })
+///     .collect();
+/// cloth.set_positions(&folded).unwrap();
+/// let mut tracker = Tracker::new(TrackerConfig::for_surface(&cloth));
+/// for _ in 0..5 {
+///     tracker.step_self(&cloth);
+/// }
+/// assert!(!tracker.contacts().is_empty());
+/// ```
+#[derive(Debug, Clone)]
+pub struct Tracker {
+    config: TrackerConfig,
+    pairs: PairList,
+    contacts: Vec<Contact>,
+    frame: u64,
+    stats: StepStats,
+    scratch: Scratch,
+}
+
+#[derive(Debug, Default, Clone)]
+struct Scratch {
+    starts: Vec<(u32, u32)>,
+    pairs: Vec<TrackedPair>,
+    sampler: SamplerScratch,
+    prune: PruneScratch,
+    visited: HashSet<(u32, u32)>,
+    queue: Vec<(u32, u32)>,
+}
+
+impl Tracker {
+    /// A tracker with no pairs yet.
+    pub fn new(config: TrackerConfig) -> Self {
+        Tracker {
+            config,
+            pairs: PairList::new(),
+            contacts: Vec::new(),
+            frame: 0,
+            stats: StepStats::default(),
+            scratch: Scratch::default(),
+        }
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
+    /// Changes the configuration; kept pairs stay.
+    pub fn set_config(&mut self, config: TrackerConfig) {
+        self.config = config;
+    }
+
+    /// The active pairs after the last step, closest first.
+    pub fn pairs(&self) -> &[TrackedPair] {
+        &self.pairs
+    }
+
+    /// The contacts of the last step: tracked pairs closer than the thickness first (closest
+    /// first), then propagated ones.
+    pub fn contacts(&self) -> &[Contact] {
+        &self.contacts
+    }
+
+    /// What the last step did.
+    pub fn stats(&self) -> &StepStats {
+        &self.stats
+    }
+
+    /// Steps taken so far.
+    pub fn frame(&self) -> u64 {
+        self.frame
+    }
+
+    /// Forgets every pair (for example after the mesh was replaced).
+    pub fn clear(&mut self) {
+        self.pairs.clear();
+        self.contacts.clear();
+    }
+
+    /// One frame of self-collision tracking of `surface` at its current positions. Contacts
+    /// are in the mesh's own frame; triangles sharing a vertex are never paired.
+    pub fn step_self(&mut self, surface: &TrackedSurface) -> &[Contact] {
+        let placed = Placed {
+            surface,
+            pose: None,
+        };
+        self.step(placed, placed, true, surface.size());
+        &self.contacts
+    }
+
+    /// One frame of tracking between `a` at `pose_a` and `b` at `pose_b`. Contacts are in the
+    /// world frame; the normal points from `a` towards `b`.
+    pub fn step_pair(
+        &mut self,
+        a: &TrackedSurface,
+        pose_a: &Pose,
+        b: &TrackedSurface,
+        pose_b: &Pose,
+    ) -> &[Contact] {
+        let rel = pose_a.inverse_mul(pose_b).to_f64();
+        let pa = Placed {
+            surface: a,
+            pose: None,
+        };
+        let pb = Placed {
+            surface: b,
+            pose: Some(rel),
+        };
+        self.step(pa, pb, false, a.size().max(b.size()));
+        if *pose_a != Pose::IDENTITY {
+            for c in &mut self.contacts {
+                c.point_a = pose_a.transform_point(c.point_a);
+                c.point_b = pose_a.transform_point(c.point_b);
+                c.normal = pose_a.transform_vector(c.normal);
+            }
+        }
+        &self.contacts
+    }
+
+    fn step(&mut self, a: Placed, b: Placed, self_mode: bool, size: f32) {
+        let cfg = &self.config;
+        let mean_edge = a
+            .surface
+            .mean_edge_length()
+            .max(b.surface.mean_edge_length()) as f64;
+        let mut stats = StepStats::default();
+        let searcher = Searcher {
+            a,
+            b,
+            self_mode,
+            mode: cfg.search,
+            max_iterations: cfg.max_iterations,
+            epsilon: 1e-9 * size as f64,
+            thickness: cfg.thickness.max(0.0) as f64,
+            exclusion_rings: cfg.exclusion_rings,
+            slide_limit: SLIDE_LIMIT_EDGES * mean_edge,
+        };
+        let s = &mut self.scratch;
+        let frame = self.frame;
+        self.frame += 1;
+
+        // 1. New random pairs (seeded by the configuration and the frame only).
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(mix(cfg.seed, frame));
+        s.starts.clear();
+        let far_eps = cfg.far_epsilon.max(0.0) * size;
+        let margin = cfg.thickness.max(0.0) + far_eps;
+        draw(
+            cfg.sampling,
+            cfg.pairs_per_frame,
+            &a,
+            &b,
+            self_mode,
+            cfg.exclusion_rings,
+            cfg.thickness,
+            margin,
+            self.contacts.iter().map(|c| (c.triangle_a, c.triangle_b)),
+            &mut rng,
+            &mut s.sampler,
+            &mut s.starts,
+        );
+        stats.sampled = s.starts.len();
+        stats.patch_overlaps = s.sampler.overlap_count;
+
+        // 2. Local search from every kept and new pair.
+        let mut counters = SearchCounters::default();
+        s.pairs.clear();
+        let kept = self
+            .pairs
+            .iter()
+            .map(|p| (p.triangle_a, p.triangle_b, p.age + 1));
+        let fresh = s.starts.iter().map(|&(x, y)| (x, y, 0));
+        for (ta, tb, age) in kept.chain(fresh) {
+            if searcher.excluded(ta, tb) {
+                continue;
+            }
+            let start = searcher.locate(ta, tb, &mut counters);
+            let (l, sliding) = searcher.descend(start, &mut counters);
+            if sliding || searcher.sliding(&l) {
+                stats.pruned.sliding += 1;
+                continue;
+            }
+            s.pairs.push(tracked(&a, &b, &l, age, self_mode));
+        }
+        stats.iterations = counters.iterations;
+        stats.evaluations = counters.evaluations;
+
+        // 3. Prune.
+        prune(
+            &mut s.pairs,
+            a.topology(),
+            b.topology(),
+            self_mode,
+            cfg.far_factor,
+            far_eps as f64,
+            cfg.thickness,
+            cfg.redundancy_rings,
+            cfg.max_active_pairs,
+            &mut s.prune,
+            &mut stats.pruned,
+        );
+        self.pairs.clear();
+        self.pairs.extend(s.pairs.iter().copied());
+        stats.active = self.pairs.len();
+
+        // 4. Contacts, then collision propagation around them.
+        self.contacts.clear();
+        s.visited.clear();
+        s.queue.clear();
+        let thickness = cfg.thickness.max(0.0) as f64;
+        for p in &self.pairs {
+            if p.distance <= thickness {
+                let l = Located {
+                    ta: p.triangle_a,
+                    tb: p.triangle_b,
+                    cp: ClosestPoints {
+                        distance: p.distance,
+                        point_a: p.point_a,
+                        point_b: p.point_b,
+                    },
+                    fa: p.feature_a,
+                    fb: p.feature_b,
+                };
+                self.contacts
+                    .push(Contact::new(&a, &b, &l, cfg.thickness, false));
+                let key = key(self_mode, p.triangle_a, p.triangle_b);
+                if s.visited.insert(key) {
+                    s.queue.push((p.triangle_a, p.triangle_b));
+                }
+            }
+        }
+        let mut added = 0;
+        while let Some((ta, tb)) = s.queue.pop() {
+            if added >= cfg.propagation_limit {
+                break;
+            }
+            let na = a
+                .topology()
+                .triangle_neighbours(ta)
+                .iter()
+                .map(|&x| (x, tb));
+            let nb = b
+                .topology()
+                .triangle_neighbours(tb)
+                .iter()
+                .map(|&y| (ta, y));
+            for (x, y) in na.chain(nb) {
+                if added >= cfg.propagation_limit {
+                    break;
+                }
+                if searcher.excluded(x, y) || !s.visited.insert(key(self_mode, x, y)) {
+                    continue;
+                }
+                let l = searcher.locate(x, y, &mut counters);
+                if l.cp.distance <= thickness && !searcher.sliding(&l) {
+                    self.contacts
+                        .push(Contact::new(&a, &b, &l, cfg.thickness, true));
+                    s.queue.push((x, y));
+                    added += 1;
+                }
+            }
+        }
+        stats.evaluations = counters.evaluations;
+        stats.contacts = self.contacts.len();
+        stats.propagated = added;
+        self.stats = stats;
+    }
+}
+
+fn key(self_mode: bool, x: u32, y: u32) -> (u32, u32) {
+    if self_mode {
+        (x.min(y), x.max(y))
+    } else {
+        (x, y)
+    }
+}
+
+/// A pair record from a search result; in self-collision, sides ordered so that `(x, y)` and
+/// `(y, x)` are the same record.
+fn tracked(a: &Placed, b: &Placed, l: &Located, age: u32, self_mode: bool) -> TrackedPair {
+    let va =
+        l.fa.vertices(a.topology(), a.surface.mesh().triangles())
+            .first();
+    let vb =
+        l.fb.vertices(b.topology(), b.surface.mesh().triangles())
+            .first();
+    let p = TrackedPair {
+        triangle_a: l.ta,
+        triangle_b: l.tb,
+        feature_a: l.fa,
+        feature_b: l.fb,
+        distance: l.cp.distance,
+        point_a: l.cp.point_a,
+        point_b: l.cp.point_b,
+        vertex_a: va,
+        vertex_b: vb,
+        age,
+    };
+    if self_mode && (l.fb, l.tb) < (l.fa, l.ta) {
+        TrackedPair {
+            triangle_a: p.triangle_b,
+            triangle_b: p.triangle_a,
+            feature_a: p.feature_b,
+            feature_b: p.feature_a,
+            point_a: p.point_b,
+            point_b: p.point_a,
+            vertex_a: p.vertex_b,
+            vertex_b: p.vertex_a,
+            ..p
+        }
+    } else {
+        p
+    }
+}
+
+/// SplitMix64 of the seed and the frame: independent streams per frame.
+fn mix(seed: u64, frame: u64) -> u64 {
+    let mut z = seed ^ frame.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}

@@ -1,0 +1,432 @@
+//! Stochastic closest-feature tracking against exact answers: pairs of meshes, self-collision,
+//! plateaus, zero-length edges, adjacency exclusion, boundaries, non-manifold edges,
+//! determinism.
+
+mod common;
+
+use glam::{DVec3, Quat, Vec3};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, closest_points, intersects};
+use stochastic_collision::deform::Whirl;
+use stochastic_collision::geometry::{Pose, closest_points_triangle_triangle};
+use stochastic_collision::mesh::{Topology, TriMesh, generate};
+use stochastic_collision::tracking::{
+    Contact, Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig, triangles_within_rings,
+};
+
+fn tri(mesh: &TriMesh, t: u32, pose: &Pose) -> [DVec3; 3] {
+    mesh.triangle(t as usize)
+        .map(|p| pose.transform_point(p).as_dvec3())
+}
+
+/// Every contact is real: its two triangles are within the thickness (recomputed exactly),
+/// its numbers are finite, its normal is a unit vector.
+fn check_contacts(contacts: &[Contact], a: &TriMesh, pa: &Pose, b: &TriMesh, pb: &Pose, h: f32) {
+    for c in contacts {
+        let d =
+            closest_points_triangle_triangle(&tri(a, c.triangle_a, pa), &tri(b, c.triangle_b, pb));
+        assert!(
+            d.distance <= h as f64 * (1.0 + 1e-5) + 1e-9,
+            "{c:?}: exact {}",
+            d.distance
+        );
+        assert!(
+            (d.distance - c.distance as f64).abs() <= 1e-4 * (1.0 + d.distance),
+            "{c:?}"
+        );
+        assert!(c.point_a.is_finite() && c.point_b.is_finite() && c.depth.is_finite());
+        assert!((c.normal.length() - 1.0).abs() < 1e-3, "{c:?}");
+        assert!(c.depth >= 0.0);
+    }
+}
+
+#[test]
+fn pair_of_meshes_contacts_match_the_exact_query() {
+    let ball = generate::icosphere(1.0, 3);
+    let cm = CollisionMesh::new(ball.clone());
+    let surface = TrackedSurface::new(ball.clone());
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+    let mut ws = QueryWorkspace::new();
+    let (mut hits, mut misses) = (0, 0);
+    for case in 0..24 {
+        let dir = Vec3::new(
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+            rng.random_range(-1.0..1.0),
+        )
+        .normalize_or(Vec3::X);
+        let gap: f32 = rng.random_range(1.9..2.1);
+        let pa = Pose::IDENTITY;
+        let pb = Pose::new(dir * gap, Quat::from_rotation_y(rng.random_range(0.0..6.0)));
+        let exact = intersects(&cm, &pa, &cm, &pb, &mut ws);
+        let config = TrackerConfig {
+            seed: case,
+            ..TrackerConfig::default()
+        };
+        let mut tracker = Tracker::new(config);
+        let mut found = false;
+        for _ in 0..5 {
+            let contacts = tracker.step_pair(&surface, &pa, &surface, &pb);
+            check_contacts(contacts, &ball, &pa, &ball, &pb, 0.0);
+            found |= !contacts.is_empty();
+        }
+        assert_eq!(found, exact, "case {case}: tracker {found}, exact {exact}");
+        if exact {
+            hits += 1
+        } else {
+            misses += 1
+        }
+        // Convex meshes: the locally closest pair is the globally closest one.
+        if !exact {
+            let d = closest_points(&cm, &pa, &cm, &pb, f32::INFINITY, &mut ws)
+                .unwrap()
+                .distance;
+            let best = tracker.pairs().first().expect("a pair survives").distance;
+            assert!(
+                (best - d as f64).abs() <= 1e-3 * (1.0 + d as f64),
+                "case {case}: {best} vs {d}"
+            );
+        }
+    }
+    assert!(
+        hits > 3 && misses > 3,
+        "both outcomes exercised: {hits} hits, {misses} misses"
+    );
+}
+
+#[test]
+fn both_search_variants_end_at_local_minima() {
+    let ball = generate::icosphere(1.0, 2);
+    let surface = TrackedSurface::new(ball.clone());
+    let pa = Pose::IDENTITY;
+    let pb = Pose::new(Vec3::new(2.3, 0.4, -0.2), Quat::from_rotation_z(0.3));
+    let cm = CollisionMesh::new(ball.clone());
+    let d = closest_points(
+        &cm,
+        &pa,
+        &cm,
+        &pb,
+        f32::INFINITY,
+        &mut QueryWorkspace::new(),
+    )
+    .unwrap()
+    .distance as f64;
+    for search in [SearchMode::Full, SearchMode::TwoStep] {
+        for sampling in [Sampling::Uniform, Sampling::Velocity, Sampling::Hierarchy] {
+            let config = TrackerConfig {
+                search,
+                sampling,
+                pairs_per_frame: 8,
+                ..TrackerConfig::default()
+            };
+            let mut tracker = Tracker::new(config);
+            for _ in 0..4 {
+                tracker.step_pair(&surface, &pa, &surface, &pb);
+            }
+            if sampling == Sampling::Hierarchy {
+                // No patches within the margin: no contact possible, nothing drawn.
+                assert!(tracker.pairs().is_empty() && tracker.stats().sampled == 0);
+                continue;
+            }
+            let best = tracker.pairs().first().expect("pairs survive").distance;
+            assert!(
+                (best - d).abs() < 1e-3,
+                "{search:?}/{sampling:?}: {best} vs {d}"
+            );
+            assert!(tracker.contacts().is_empty());
+        }
+    }
+}
+
+/// A cloth whose part beyond `x = fold_at` is turned over the other part: at height `lift`
+/// (negative: below) at the fold, rising with the distance from the fold so that it cuts
+/// through the flat part a quarter of the way out.
+fn folded_cloth(n: u32, fold_at: f32, lift: f32) -> (TriMesh, Vec<Vec3>) {
+    let flat = generate::cloth_grid(1.0, 1.0, n, n);
+    let folded = flat
+        .positions()
+        .iter()
+        .map(|p| {
+            if p.x > fold_at {
+                Vec3::new(
+                    2.0 * fold_at - p.x,
+                    lift * (1.0 - 4.0 * (p.x - fold_at)),
+                    p.z,
+                )
+            } else {
+                *p
+            }
+        })
+        .collect();
+    (flat, folded)
+}
+
+#[test]
+fn self_collision_of_a_folded_cloth_reports_only_real_contacts() {
+    let (flat, folded) = folded_cloth(24, 0.1, -0.02);
+    let mut surface = TrackedSurface::new(flat.clone());
+    surface.set_positions(&folded).unwrap();
+    let config = TrackerConfig::for_surface(&surface);
+    let h = config.thickness;
+    let mut tracker = Tracker::new(config);
+    let mut seen = 0;
+    let moved = surface.mesh().clone();
+    for _ in 0..6 {
+        let contacts = tracker.step_self(&surface);
+        check_contacts(
+            contacts,
+            &moved,
+            &Pose::IDENTITY,
+            &moved,
+            &Pose::IDENTITY,
+            h,
+        );
+        seen += contacts.len();
+        let topo = surface.topology();
+        for c in contacts {
+            let (a, b) = (
+                moved.triangles()[c.triangle_a as usize],
+                moved.triangles()[c.triangle_b as usize],
+            );
+            assert!(
+                !triangles_within_rings(topo, a, b, 1),
+                "adjacent pair reported: {c:?}"
+            );
+        }
+    }
+    assert!(seen > 0, "the fold's crossing was not found");
+    assert!(
+        tracker.contacts().iter().any(|c| c.propagated),
+        "propagation extends contacts"
+    );
+}
+
+#[test]
+fn flat_and_curved_sheets_alone_have_no_self_contacts() {
+    // Adjacency exclusion: with a thickness of half an edge, neighbours would all "touch".
+    for mesh in [
+        generate::cloth_grid(1.0, 1.0, 20, 20),
+        generate::icosphere(1.0, 3),
+        generate::tube(0.3, 1.0, 16, 12, false),
+    ] {
+        let surface = TrackedSurface::new(mesh.clone());
+        let config = TrackerConfig {
+            thickness: 0.5 * surface.mean_edge_length(),
+            pairs_per_frame: 128,
+            ..TrackerConfig::default()
+        };
+        let mut tracker = Tracker::new(config);
+        for _ in 0..5 {
+            assert!(tracker.step_self(&surface).is_empty());
+        }
+        let topo = surface.topology();
+        for p in tracker.pairs() {
+            let (a, b) = (
+                mesh.triangles()[p.triangle_a as usize],
+                mesh.triangles()[p.triangle_b as usize],
+            );
+            assert!(!triangles_within_rings(topo, a, b, 1));
+        }
+    }
+}
+
+#[test]
+fn coplanar_plateaus_and_coincident_sheets_terminate_with_finite_distances() {
+    // Two parallel 20×20 grids a gap apart: every facing pair is equally close (a plateau);
+    // then coincident (gap 0), where every pair touches.
+    let sheet = generate::cloth_grid(1.0, 1.0, 20, 20);
+    let surface = TrackedSurface::new(sheet.clone());
+    for gap in [0.05f32, 0.0, 1e-7] {
+        for search in [SearchMode::Full, SearchMode::TwoStep] {
+            let config = TrackerConfig {
+                search,
+                thickness: 0.01,
+                max_iterations: 1000,
+                ..TrackerConfig::default()
+            };
+            let mut tracker = Tracker::new(config.clone());
+            let pb = Pose::from_translation(Vec3::Y * gap);
+            for _ in 0..3 {
+                tracker.step_pair(&surface, &Pose::IDENTITY, &surface, &pb);
+                let stats = tracker.stats();
+                // Strict decrease: no cycling, so far fewer steps than the cap allows.
+                let searched = (stats.active + stats.sampled).max(1) as u64;
+                assert!(
+                    stats.iterations <= searched * 60,
+                    "{search:?} gap {gap}: {stats:?}"
+                );
+                for p in tracker.pairs() {
+                    assert!(p.distance.is_finite() && p.distance >= 0.0);
+                    assert!(
+                        (p.distance - gap as f64).abs() < 1e-5,
+                        "{search:?} gap {gap}: {p:?}"
+                    );
+                }
+                check_contacts(
+                    tracker.contacts(),
+                    &sheet,
+                    &Pose::IDENTITY,
+                    &sheet,
+                    &pb,
+                    config.thickness,
+                );
+            }
+            assert_eq!(tracker.contacts().is_empty(), gap > config.thickness);
+        }
+    }
+}
+
+#[test]
+fn zero_length_edges_and_huge_or_tiny_scales_stay_finite() {
+    // A grid whose middle column is collapsed onto its neighbour: zero-length edges and
+    // zero-area triangles, then folded through itself; at scales 1e-4 and 1e4.
+    for scale in [1.0f32, 1e-4, 1e4] {
+        let (flat, folded) = folded_cloth(16, 0.05, -0.03);
+        let collapse = |p: Vec3| {
+            let x = if (p.x - 0.0625).abs() < 1e-4 {
+                0.0
+            } else {
+                p.x
+            };
+            Vec3::new(x, p.y, p.z) * scale
+        };
+        let rest: Vec<Vec3> = flat.positions().iter().map(|&p| collapse(p)).collect();
+        let mesh = TriMesh::new(rest, flat.triangles().to_vec()).unwrap();
+        let mut surface = TrackedSurface::new(mesh);
+        let moved: Vec<Vec3> = folded.iter().map(|&p| collapse(p)).collect();
+        surface.set_positions(&moved).unwrap();
+        let config = TrackerConfig::for_surface(&surface);
+        let h = config.thickness;
+        let mut tracker = Tracker::new(config);
+        let current = surface.mesh().clone();
+        let mut any = false;
+        for _ in 0..5 {
+            let contacts = tracker.step_self(&surface);
+            any |= !contacts.is_empty();
+            check_contacts(
+                contacts,
+                &current,
+                &Pose::IDENTITY,
+                &current,
+                &Pose::IDENTITY,
+                h,
+            );
+            for p in tracker.pairs() {
+                assert!(p.distance.is_finite() && p.point_a.is_finite() && p.point_b.is_finite());
+            }
+        }
+        assert!(any, "scale {scale}: no contact found in the fold");
+    }
+}
+
+fn run_whirl(mesh: &TriMesh, frames: usize, seed: u64) -> Vec<Vec<Contact>> {
+    let whirl = Whirl::new(mesh, frames, seed);
+    let mut surface = TrackedSurface::new(mesh.clone());
+    let mut tracker = Tracker::new(TrackerConfig {
+        seed,
+        ..TrackerConfig::for_surface(&surface)
+    });
+    let mut p = Vec::new();
+    (0..frames)
+        .map(|f| {
+            whirl.positions(f, &mut p);
+            surface.set_positions(&p).unwrap();
+            tracker.step_self(&surface).to_vec()
+        })
+        .collect()
+}
+
+#[test]
+fn seeded_runs_are_identical_whatever_thread_runs_them() {
+    let mesh = generate::tube(0.1, 1.5, 16, 60, true);
+    let here = run_whirl(&mesh, 30, 9);
+    let threads: Vec<_> = (0..2)
+        .map(|_| {
+            let m = mesh.clone();
+            std::thread::spawn(move || run_whirl(&m, 30, 9))
+        })
+        .collect();
+    for t in threads {
+        assert_eq!(t.join().unwrap(), here);
+    }
+    assert!(
+        here.iter().any(|c| !c.is_empty()),
+        "the whirl makes contacts"
+    );
+    assert_ne!(
+        run_whirl(&mesh, 30, 10),
+        here,
+        "another seed draws other pairs"
+    );
+}
+
+#[test]
+fn boundaries_and_non_manifold_edges_are_handled() {
+    // An open tube (two boundary loops) and a "book": two sheets sharing one row of vertices
+    // (non-manifold edges), both whirled through themselves.
+    let tube = generate::tube(0.1, 1.5, 16, 60, false);
+    let page = generate::cloth_grid(1.0, 1.0, 16, 16);
+    let n = page.vertex_count() as u32;
+    let mut positions = page.positions().to_vec();
+    let mut triangles = page.triangles().to_vec();
+    // Two more sheets turned up and down about the x = -0.5 edge, sharing its vertices: the
+    // edges along it have three triangles.
+    for sign in [1.0f32, -1.0] {
+        let mut map = Vec::with_capacity(n as usize);
+        for (i, p) in page.positions().iter().enumerate() {
+            if (p.x + 0.5).abs() < 1e-6 {
+                map.push(i as u32);
+            } else {
+                map.push(positions.len() as u32);
+                positions.push(Vec3::new(-0.5 + 0.02 * sign, sign * (p.x + 0.5), p.z));
+            }
+        }
+        triangles.extend(page.triangles().iter().map(|t| t.map(|v| map[v as usize])));
+    }
+    let book = TriMesh::new(positions, triangles).unwrap();
+    assert!(Topology::new(&book).non_manifold_edge_count() > 0);
+    for mesh in [tube, book] {
+        assert!(Topology::new(&mesh).boundary_edge_count() > 0);
+        let frames: Vec<usize> = (0..40).collect();
+        assert!(
+            whirl_and_check(&mesh, &frames, 2) > 0,
+            "the whirl makes contacts"
+        );
+    }
+}
+
+/// Tracks `mesh` whirled (40-frame animation) at `frames`, checking every contact against
+/// the exact distance; returns how many contacts were reported.
+fn whirl_and_check(mesh: &TriMesh, frames: &[usize], seed: u64) -> usize {
+    let whirl = Whirl::new(mesh, 40, seed);
+    let mut surface = TrackedSurface::new(mesh.clone());
+    let config = TrackerConfig::for_surface(&surface);
+    let h = config.thickness;
+    let mut tracker = Tracker::new(config);
+    let mut p = Vec::new();
+    let mut total = 0;
+    for &f in frames {
+        whirl.positions(f, &mut p);
+        surface.set_positions(&p).unwrap();
+        let contacts = tracker.step_self(&surface).to_vec();
+        total += contacts.len();
+        let current = surface.mesh().clone();
+        let id = Pose::IDENTITY;
+        check_contacts(&contacts, &current, &id, &current, &id, h);
+    }
+    total
+}
+
+#[test]
+fn shared_meshes_with_boundaries_and_non_manifold_edges_track_cleanly() {
+    for file in ["plane_50x50.obj", "dragon_50k.obj"] {
+        let Some(path) = common::shared_mesh(file) else {
+            continue;
+        };
+        let mesh = TriMesh::from_obj(&path).unwrap();
+        let topo = Topology::new(&mesh);
+        assert!(topo.boundary_edge_count() > 0 || topo.non_manifold_edge_count() > 0);
+        whirl_and_check(&mesh, &[0, 8, 12, 16, 20], 4);
+    }
+}
