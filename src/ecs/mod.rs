@@ -63,4 +63,4 @@ pub use response::{
     impulse_response, integrate_velocities, penalty_response,
 };
 pub use schedule::CollisionSystems;
-pub use tracking_systems::FeaturePairs;
+pub use tracking_systems::{FeaturePairs, TrackingState};

@@ -17,7 +17,9 @@ use super::narrow_phase::{PairOutcomes, narrow_phase};
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderFrame, PrepareState, gather_colliders, refit_deformables};
 use super::schedule::CollisionSystems;
-use super::tracking_systems::{needs_self_pass, needs_tracking, self_collision, track_pairs};
+use super::tracking_systems::{
+    TrackingState, forget_untracked, needs_self_pass, needs_tracking, self_collision, track_pairs,
+};
 
 /// How much work the collision stages (Prepare to Report) may do per run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -175,6 +177,7 @@ impl Plugin for StochasticCollisionPlugin {
             .init_resource::<BroadPhaseState>()
             .init_resource::<CandidatePairs>()
             .init_resource::<PairOutcomes>()
+            .init_resource::<TrackingState>()
             .init_resource::<ReportState>()
             .init_resource::<ContactQueue>()
             .configure_sets(
@@ -196,6 +199,7 @@ impl Plugin for StochasticCollisionPlugin {
                     (
                         self_collision.run_if(needs_self_pass),
                         track_pairs.run_if(needs_tracking),
+                        forget_untracked,
                     )
                         .chain()
                         .in_set(Tracking),

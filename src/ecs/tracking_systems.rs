@@ -1,27 +1,35 @@
 //! Tracking stage: pairs with [`Fidelity::Tracking`] and self-collision of deformable meshes.
 //!
-//! Both produce contacts with points, normals and depths from intersecting triangle pairs. The
-//! working path here is the exact BVH query (`intersecting_pairs` for tracked pairs,
-//! `self_intersections` for [`SelfCollision`] meshes), run in parallel per pair or per mesh;
-//! the stochastic closest-feature tracker plugs in here, and keeps its per-partner feature
-//! pairs in each entity's [`FeaturePairs`].
+//! A self-colliding deformable mesh with [`Fidelity::Tracking`] and every pair whose fidelity
+//! is `Tracking` run the stochastic closest-feature [`Tracker`]: its pairs persist from run to
+//! run (in [`TrackingState`], one tracker per pair or mesh, seeded from the configured seed
+//! and the two entities, so results do not depend on thread scheduling), and its contacts come
+//! with points, normals and depths. Other self-colliding meshes get the exact BVH pass
+//! (`self_intersections`). Trackers and surfaces run in parallel; the outcomes are merged in
+//! entity order. Each entity's [`FeaturePairs`] lists the triangle pairs in contact with each
+//! partner, as of the last run.
 //!
 //! [`Fidelity::Tracking`]: super::Fidelity::Tracking
 //! [`SelfCollision`]: super::SelfCollision
+use std::collections::HashMap;
+use std::sync::Arc;
 use std::time::Instant;
 
+use bevy_ecs::entity::{EntityHashMap, EntityHashSet};
 use bevy_ecs::prelude::*;
 use smallvec::SmallVec;
 
 use super::broad_phase::CandidatePair;
 use super::components::{Deformable, Fidelity, SelfCollision};
-use super::contact::triangle_pair_contact;
+use super::contact::{ContactPoint, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::narrow_phase::{Method, PairOutcome, PairOutcomes, spread, with_workspaces};
 use super::plugin::CollisionConfig;
 use super::pool::CollisionTaskPool;
-use super::prepare::ColliderFrame;
-use crate::bvh::{TrianglePair, intersecting_pairs, self_intersections};
+use super::prepare::{ColliderEntry, ColliderFrame, Geometry};
+use crate::bvh::{CollisionMesh, TrianglePair, self_intersections};
+use crate::geometry::Pose;
+use crate::tracking::{Contact, TrackedSurface, Tracker, TrackerConfig};
 
 /// The feature pairs an entity is tracking against each partner (itself for self-collision),
 /// as of the last run: kept across runs, dropped with the entity. Inserted by the Tracking
@@ -42,6 +50,216 @@ impl FeaturePairs {
     }
 }
 
+/// A mesh prepared for tracking, and the geometry it was prepared from.
+struct Surface {
+    /// Identity of a rigid source tree (its `Arc`'s address; 0 for a deformable mesh, which
+    /// is recognised by its triangles): a swapped collider rebuilds.
+    source: usize,
+    surface: Arc<TrackedSurface>,
+}
+
+/// The stochastic trackers between runs: one [`TrackedSurface`] per tracked entity (rigid
+/// meshes share one per collider mesh) and one [`Tracker`] per tracked pair or self-colliding
+/// mesh. Entries of entities that left the tracking stage are dropped every run, so memory
+/// stays bounded.
+#[derive(Resource, Default)]
+pub struct TrackingState {
+    surfaces: EntityHashMap<Surface>,
+    shared: HashMap<usize, Arc<TrackedSurface>>,
+    trackers: HashMap<(Entity, Entity), Tracker>,
+}
+
+impl TrackingState {
+    /// Trackers alive (pairs and self-colliding meshes being tracked).
+    pub fn trackers(&self) -> usize {
+        self.trackers.len()
+    }
+
+    /// The tracker of a pair (`(e, e)` for a self-colliding mesh), if it is being tracked.
+    pub fn tracker(&self, a: Entity, b: Entity) -> Option<&Tracker> {
+        self.trackers.get(&(a.min(b), a.max(b)))
+    }
+}
+
+/// Brings the surfaces of `entries` up to date: rigid meshes once per shared tree, deformable
+/// ones built once and moved to the refitted positions every run (in parallel). A swapped
+/// collider (another tree, or a deformable with other triangles) gets a new surface, and the
+/// trackers involving it start over.
+fn update_surfaces(
+    state: &mut TrackingState,
+    entries: &[&ColliderEntry],
+    pool: &CollisionTaskPool,
+) {
+    let mut deformed: EntityHashMap<&CollisionMesh> = EntityHashMap::default();
+    for e in entries {
+        let (source, same) = match &e.geometry {
+            Geometry::Rigid(tree) => {
+                let source = Arc::as_ptr(tree) as usize;
+                (
+                    source,
+                    state
+                        .surfaces
+                        .get(&e.entity)
+                        .is_some_and(|s| s.source == source),
+                )
+            }
+            Geometry::Deformable(mesh) => {
+                deformed.insert(e.entity, &**mesh);
+                let same = state.surfaces.get(&e.entity).is_some_and(|s| {
+                    s.source == 0 && s.surface.mesh().triangles() == mesh.mesh().triangles()
+                });
+                (0, same)
+            }
+        };
+        if same {
+            continue;
+        }
+        let surface = match &e.geometry {
+            Geometry::Rigid(tree) => state
+                .shared
+                .entry(source)
+                .or_insert_with(|| {
+                    Arc::new(TrackedSurface::new(tree.collision_mesh().mesh().clone()))
+                })
+                .clone(),
+            Geometry::Deformable(mesh) => Arc::new(TrackedSurface::new(mesh.mesh().clone())),
+        };
+        if state
+            .surfaces
+            .insert(e.entity, Surface { source, surface })
+            .is_some()
+        {
+            state
+                .trackers
+                .retain(|k, _| k.0 != e.entity && k.1 != e.entity);
+        }
+    }
+    let mut jobs: Vec<(&mut Arc<TrackedSurface>, &CollisionMesh)> = state
+        .surfaces
+        .iter_mut()
+        .filter_map(|(entity, slot)| deformed.get(entity).map(|m| (&mut slot.surface, *m)))
+        .collect();
+    pool.for_each_mut(&mut jobs, 1, |(surface, mesh)| {
+        // Deformable surfaces are not shared: no copy. Positions come from a validated refit.
+        let s = Arc::make_mut(surface);
+        if s.mesh().positions() != mesh.mesh().positions() {
+            let _ = s.set_positions(mesh.mesh().positions());
+        }
+    });
+}
+
+/// The tracker configuration of a pair: thickness from the meshes, pairs per frame from the
+/// fidelity, a seed from the configured seed and the two entities.
+fn tracker_config(
+    a: &TrackedSurface,
+    b: &TrackedSurface,
+    pairs_per_frame: u32,
+    seed: u64,
+    ea: Entity,
+    eb: Entity,
+) -> TrackerConfig {
+    let mut config = TrackerConfig::for_surface(a);
+    config.thickness = 0.05 * (a.mean_edge_length() + b.mean_edge_length());
+    config.pairs_per_frame = pairs_per_frame.max(1) as usize;
+    config.seed = seed ^ ea.to_bits().rotate_left(17) ^ eb.to_bits().rotate_left(41);
+    config
+}
+
+/// A tracker contact as a contact point in world space.
+fn world_contact(c: &Contact, pose_a: &Pose, self_mode: bool) -> ContactPoint {
+    let (pa, pb, n) = if self_mode {
+        (
+            pose_a.transform_point(c.point_a),
+            pose_a.transform_point(c.point_b),
+            pose_a.transform_vector(c.normal),
+        )
+    } else {
+        (c.point_a, c.point_b, c.normal)
+    };
+    ContactPoint {
+        point: (pa + pb) * 0.5,
+        normal: n,
+        depth: c.depth,
+        triangles: Some(TrianglePair {
+            a: c.triangle_a,
+            b: c.triangle_b,
+        }),
+    }
+}
+
+/// One tracker's work in a run.
+struct Job {
+    key: (Entity, Entity),
+    a: u32,
+    b: u32,
+    tracker: Tracker,
+    contacts: SmallVec<[ContactPoint; 1]>,
+    pairs: SmallVec<[TrianglePair; 4]>,
+}
+
+/// Runs `jobs` in parallel, each on its own tracker.
+fn run_jobs(
+    jobs: &mut [Job],
+    frame: &ColliderFrame,
+    state: &TrackingState,
+    pool: &CollisionTaskPool,
+    max_contacts: usize,
+) {
+    pool.for_each_mut(jobs, 1, |job| {
+        let (ea, eb) = (
+            &frame.entries[job.a as usize],
+            &frame.entries[job.b as usize],
+        );
+        let sa = &state.surfaces[&ea.entity].surface;
+        let self_mode = job.a == job.b;
+        let found: Vec<Contact> = if self_mode {
+            job.tracker.step_self(sa).to_vec()
+        } else {
+            let sb = &state.surfaces[&eb.entity].surface;
+            job.tracker.step_pair(sa, &ea.pose, sb, &eb.pose).to_vec()
+        };
+        let step = found.len().div_ceil(max_contacts.max(1)).max(1);
+        job.contacts = found
+            .iter()
+            .step_by(step)
+            .map(|c| world_contact(c, &ea.pose, self_mode))
+            .collect();
+        job.pairs = found
+            .iter()
+            .take(16)
+            .map(|c| TrianglePair {
+                a: c.triangle_a,
+                b: c.triangle_b,
+            })
+            .collect();
+    });
+}
+
+/// Records `pairs` as `a`'s feature pairs with `b` (inserting the component if needed).
+fn record_pairs(
+    features: &mut Query<&mut FeaturePairs>,
+    commands: &mut Commands,
+    a: Entity,
+    b: Entity,
+    pairs: SmallVec<[TrianglePair; 4]>,
+) {
+    match features.get_mut(a) {
+        Ok(mut f) => {
+            let f = &mut *f;
+            f.partners.retain(|(e, _)| *e != b);
+            if !pairs.is_empty() {
+                f.partners.push((b, pairs));
+            }
+        }
+        Err(_) if !pairs.is_empty() => {
+            let mut f = FeaturePairs::default();
+            f.partners.push((b, pairs));
+            commands.entity(a).try_insert(f);
+        }
+        Err(_) => {}
+    }
+}
+
 /// Run condition: some deformable mesh has the [`SelfCollision`] marker.
 pub fn needs_self_pass(q: Query<(), (With<SelfCollision>, With<Deformable>)>) -> bool {
     !q.is_empty()
@@ -52,20 +270,31 @@ pub fn needs_tracking(outcomes: Res<PairOutcomes>) -> bool {
     !outcomes.tracked.is_empty()
 }
 
-/// Self-collision of every [`SelfCollision`] deformable mesh, in parallel per mesh.
+/// Self-collision of every [`SelfCollision`] deformable mesh, in parallel per mesh: the
+/// stochastic tracker for meshes with [`Fidelity::Tracking`], the exact pass for the others.
+#[allow(clippy::too_many_arguments)]
 pub fn self_collision(
     frame: Res<ColliderFrame>,
     config: Res<CollisionConfig>,
     pool: Res<CollisionTaskPool>,
+    mut state: ResMut<TrackingState>,
     mut outcomes: ResMut<PairOutcomes>,
+    mut features: Query<&mut FeaturePairs>,
+    mut commands: Commands,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
     let start = Instant::now();
     let meshes: Vec<u32> = (0..frame.entries.len() as u32)
         .filter(|&i| frame.entries[i as usize].self_collision)
         .collect();
+    let (tracked, exact): (Vec<u32>, Vec<u32>) = meshes.iter().partition(|&&i| {
+        matches!(
+            frame.entries[i as usize].fidelity,
+            Fidelity::Tracking { .. }
+        )
+    });
     let max = config.max_self_contacts;
-    let results = pool.map_chunks(&meshes, 1, |chunk| {
+    let results = pool.map_chunks(&exact, 1, |chunk| {
         let e = &frame.entries[chunk[0] as usize];
         let mesh = e.geometry.mesh();
         with_workspaces(|ws, _, pairs| {
@@ -86,14 +315,79 @@ pub fn self_collision(
     });
     diag.counters.node_pairs += results.iter().map(|o| o.node_pairs).sum::<u64>();
     outcomes.outcomes.extend(results);
+
+    // Stochastic self-collision.
+    let entries: Vec<&ColliderEntry> = tracked
+        .iter()
+        .map(|&i| &frame.entries[i as usize])
+        .collect();
+    update_surfaces(&mut state, &entries, &pool);
+    let mut jobs: Vec<Job> = tracked
+        .iter()
+        .map(|&i| {
+            let e = &frame.entries[i as usize];
+            let key = (e.entity, e.entity);
+            let n = match e.fidelity {
+                Fidelity::Tracking { pairs_per_frame } => pairs_per_frame,
+                _ => 1,
+            };
+            let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
+                let s = &state.surfaces[&e.entity].surface;
+                Tracker::new(tracker_config(s, s, n, config.seed, e.entity, e.entity))
+            });
+            Job {
+                key,
+                a: i,
+                b: i,
+                tracker,
+                contacts: SmallVec::new(),
+                pairs: SmallVec::new(),
+            }
+        })
+        .collect();
+    run_jobs(&mut jobs, &frame, &state, &pool, max);
+    finish_jobs(
+        jobs,
+        &mut state,
+        &mut outcomes,
+        &mut features,
+        &mut commands,
+        Method::SelfCollision,
+    );
     diag.record(Stage::SelfCollision, start.elapsed(), meshes.len() as u64);
 }
 
-/// Tracked pairs: contacts from the intersecting triangle pairs, at most `pairs_per_frame`
-/// per pair, in parallel per pair; the pairs are kept in the first entity's [`FeaturePairs`].
+/// Merges finished jobs: outcomes in entity order, feature pairs recorded, trackers kept.
+fn finish_jobs(
+    jobs: Vec<Job>,
+    state: &mut TrackingState,
+    outcomes: &mut PairOutcomes,
+    features: &mut Query<&mut FeaturePairs>,
+    commands: &mut Commands,
+    method: Method,
+) {
+    for job in jobs {
+        let (a, b) = job.key;
+        outcomes.outcomes.push(PairOutcome::exact(
+            (a, b),
+            method,
+            job.tracker.stats().evaluations,
+            1.0,
+            job.contacts,
+        ));
+        record_pairs(features, commands, a, b, job.pairs);
+        state.trackers.insert(job.key, job.tracker);
+    }
+}
+
+/// Tracked pairs: the stochastic tracker between the two meshes, in parallel per pair; its
+/// contacts become the pair's contacts, at most `max_self_contacts` of them.
+#[allow(clippy::too_many_arguments)]
 pub fn track_pairs(
     frame: Res<ColliderFrame>,
+    config: Res<CollisionConfig>,
     pool: Res<CollisionTaskPool>,
+    mut state: ResMut<TrackingState>,
     mut outcomes: ResMut<PairOutcomes>,
     mut features: Query<&mut FeaturePairs>,
     mut commands: Commands,
@@ -101,53 +395,81 @@ pub fn track_pairs(
 ) {
     let start = Instant::now();
     let tracked: Vec<CandidatePair> = outcomes.tracked.clone();
-    let results = pool.map_chunks(&tracked, pool.chunk_size(tracked.len(), 1), |chunk| {
-        chunk
-            .iter()
-            .map(|pair| {
-                let (ea, eb) = (
-                    &frame.entries[pair.a as usize],
-                    &frame.entries[pair.b as usize],
+    let mut involved: Vec<u32> = tracked.iter().flat_map(|p| [p.a, p.b]).collect();
+    involved.sort_unstable();
+    involved.dedup();
+    let entries: Vec<&ColliderEntry> = involved
+        .iter()
+        .map(|&i| &frame.entries[i as usize])
+        .collect();
+    update_surfaces(&mut state, &entries, &pool);
+    let mut jobs: Vec<Job> = tracked
+        .iter()
+        .map(|pair| {
+            let (ea, eb) = (
+                &frame.entries[pair.a as usize],
+                &frame.entries[pair.b as usize],
+            );
+            let key = (ea.entity, eb.entity);
+            let n = match ea.fidelity.combine(eb.fidelity) {
+                Fidelity::Tracking { pairs_per_frame } => pairs_per_frame,
+                _ => 1,
+            };
+            let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
+                let (sa, sb) = (
+                    &state.surfaces[&ea.entity].surface,
+                    &state.surfaces[&eb.entity].surface,
                 );
-                let budget = match ea.fidelity.combine(eb.fidelity) {
-                    Fidelity::Tracking { pairs_per_frame } => pairs_per_frame.max(1) as usize,
-                    _ => 1,
-                };
-                let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
-                with_workspaces(|ws, _, pairs| {
-                    pairs.clear();
-                    intersecting_pairs(ma, &ea.pose, mb, &eb.pose, ws, pairs);
-                    let kept: SmallVec<[TrianglePair; 4]> = spread(pairs, budget).collect();
-                    let contacts = kept
-                        .iter()
-                        .map(|&t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
-                        .collect();
-                    let ends = (ea.entity, eb.entity);
-                    let nodes = ws.node_pairs_visited();
-                    let outcome = PairOutcome::exact(ends, Method::Tracking, nodes, 1.0, contacts);
-                    (outcome, kept)
-                })
-            })
-            .collect::<Vec<_>>()
-    });
-    for (outcome, kept) in results.into_iter().flatten() {
-        diag.counters.node_pairs += outcome.node_pairs;
-        match features.get_mut(outcome.a) {
-            Ok(mut f) => {
-                let f = &mut *f;
-                f.partners.retain(|(e, _)| *e != outcome.b);
-                if !kept.is_empty() {
-                    f.partners.push((outcome.b, kept));
-                }
+                Tracker::new(tracker_config(sa, sb, n, config.seed, ea.entity, eb.entity))
+            });
+            Job {
+                key,
+                a: pair.a,
+                b: pair.b,
+                tracker,
+                contacts: SmallVec::new(),
+                pairs: SmallVec::new(),
             }
-            Err(_) if !kept.is_empty() => {
-                let mut f = FeaturePairs::default();
-                f.partners.push((outcome.b, kept));
-                commands.entity(outcome.a).try_insert(f);
-            }
-            Err(_) => {}
-        }
-        outcomes.outcomes.push(outcome);
-    }
+        })
+        .collect();
+    run_jobs(&mut jobs, &frame, &state, &pool, config.max_self_contacts);
+    finish_jobs(
+        jobs,
+        &mut state,
+        &mut outcomes,
+        &mut features,
+        &mut commands,
+        Method::Tracking,
+    );
     diag.record(Stage::Tracking, start.elapsed(), tracked.len() as u64);
+}
+
+/// Drops trackers and surfaces of entities that are no longer tracked (despawned, or moved to
+/// another fidelity), after the Tracking stage: memory stays bounded however long the app runs.
+pub fn forget_untracked(
+    frame: Res<ColliderFrame>,
+    outcomes: Res<PairOutcomes>,
+    mut state: ResMut<TrackingState>,
+) {
+    let mut live: EntityHashSet = EntityHashSet::default();
+    let mut pairs: std::collections::HashSet<(Entity, Entity)> = Default::default();
+    for o in &outcomes.outcomes {
+        if matches!(o.method, Method::Tracking | Method::SelfCollision) {
+            live.insert(o.a);
+            live.insert(o.b);
+            pairs.insert((o.a, o.b));
+        }
+    }
+    state.trackers.retain(|k, _| pairs.contains(k));
+    state
+        .surfaces
+        .retain(|e, _| live.contains(e) && frame.get(*e).is_some());
+    let used: std::collections::HashSet<usize> = state
+        .surfaces
+        .values()
+        .map(|s| Arc::as_ptr(&s.surface) as usize)
+        .collect();
+    state
+        .shared
+        .retain(|_, s| used.contains(&(Arc::as_ptr(s) as usize)));
 }
