@@ -257,28 +257,23 @@ impl Searcher<'_> {
             DVec3::ZERO
         };
         for (x, y) in candidates {
-            let excluded = self.excluded(x, y);
-            if excluded && !may_slide {
-                continue;
-            }
+            // Bounds first (cheap): nothing at or beyond `best_d` matters, excluded or not.
             let (a, b) = (self.a.triangle(x), self.b.triangle(y));
-            let bound = if excluded {
-                closest_excluded.min(best_d)
-            } else {
-                best_d
-            };
-            if box_gap(&bounds(&a), &bounds(&b)) >= bound {
-                continue;
-            }
-            if dir != DVec3::ZERO {
+            let mut gap = box_gap(&bounds(&a), &bounds(&b));
+            if gap < best_d && dir != DVec3::ZERO {
                 let max_a = a
                     .iter()
                     .map(|p| p.dot(dir))
                     .fold(f64::NEG_INFINITY, f64::max);
                 let min_b = b.iter().map(|q| q.dot(dir)).fold(f64::INFINITY, f64::min);
-                if min_b - max_a >= bound {
-                    continue;
-                }
+                gap = gap.max(min_b - max_a);
+            }
+            if gap >= best_d {
+                continue;
+            }
+            let excluded = self.excluded(x, y);
+            if excluded && (!may_slide || gap >= closest_excluded) {
+                continue;
             }
             counters.evaluations += 1;
             let cp = closest_points_triangle_triangle(&a, &b);

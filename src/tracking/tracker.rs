@@ -18,7 +18,7 @@ use crate::geometry::{ClosestPoints, Pose};
 
 /// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
 /// `Searcher::slide_limit`).
-const SLIDE_LIMIT_EDGES: f64 = 2.0;
+const SLIDE_LIMIT_EDGES: f64 = 1.0;
 
 /// A tracked pair of locally closest features, persistent across frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
