@@ -59,8 +59,8 @@ pub use plugin::{CollisionConfig, FrameBudget, StochasticCollisionPlugin};
 pub use pool::CollisionTaskPool;
 pub use prepare::{ColliderEntry, ColliderFrame, Geometry, PrepareState};
 pub use response::{
-    ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Velocity,
-    impulse_response, integrate_velocities, penalty_response,
+    ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Rest,
+    Velocity, impulse_response, integrate_velocities, penalty_response, sleep_bodies,
 };
 pub use schedule::CollisionSystems;
 pub use tracking_systems::FeaturePairs;
