@@ -49,6 +49,8 @@ pub use components::{
     Fidelity, SelfCollision,
 };
 pub use contact::ContactPoint;
+#[cfg(feature = "diagnostic")]
+pub use diagnostics::store as diagnostics_store;
 pub use diagnostics::{CollisionCounters, CollisionDiagnostics, Stage, StageRecord};
 pub use events::{
     CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact, ContactQueue,

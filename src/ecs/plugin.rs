@@ -211,6 +211,6 @@ impl Plugin for StochasticCollisionPlugin {
                 .before(refit_deformables),
         );
         #[cfg(feature = "diagnostic")]
-        super::diagnostics::register_store(app, s);
+        super::diagnostics::store::register(app, s);
     }
 }
