@@ -17,7 +17,9 @@ use super::narrow_phase::{PairOutcomes, narrow_phase};
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderFrame, PrepareState, gather_colliders, refit_deformables};
 use super::schedule::CollisionSystems;
-use super::tracking_systems::{needs_self_pass, needs_tracking, self_collision, track_pairs};
+use super::tracking_systems::{
+    FeaturePairs, needs_self_pass, needs_tracking, prune_feature_pairs, self_collision, track_pairs,
+};
 
 /// How much work the collision stages (Prepare to Report) may do per run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -195,6 +197,7 @@ impl Plugin for StochasticCollisionPlugin {
                     narrow_phase.in_set(NarrowPhase),
                     (
                         self_collision.run_if(needs_self_pass),
+                        prune_feature_pairs.run_if(any_with_component::<FeaturePairs>),
                         track_pairs.run_if(needs_tracking),
                     )
                         .chain()
