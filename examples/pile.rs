@@ -34,6 +34,11 @@ fn main() {
     let elapsed = start.elapsed().as_secs_f64();
     let world = app.world_mut();
     let moving = pile::moving(world, 0.5);
+    let asleep = world
+        .query::<&stochastic_collision::ecs::Rest>()
+        .iter(world)
+        .filter(|r| r.is_asleep())
+        .count();
     let mut q = world.query_filtered::<&ColliderPose, With<Velocity>>();
     let (inside, below) = q.iter(world).fold((0, 0), |(i, b), p| {
         let y = p.0.translation.y;
@@ -50,7 +55,7 @@ fn main() {
         options.budget_us
     );
     println!(
-        "  {inside} bodies in the box, {below} below the floor, {moving} still moving faster than 0.5 m/s"
+        "  {inside} bodies in the box, {below} below the floor, {moving} still moving faster than 0.5 m/s, {asleep} asleep"
     );
     println!(
         "  {} contacts started, {} ended; {} ADB pairs ({} cut by the budget, {} answered from the last frame)",

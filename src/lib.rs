@@ -33,8 +33,8 @@
 //! ```
 //!
 //! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them, `adb` on top of `bvh`;
-//! `poses` generates benchmark scenarios. None of them imports Bevy; the engine integration
-//! will live in its own layer.
+//! `poses` generates benchmark scenarios. None of them imports Bevy: the engine integration is
+//! [`ecs`] alone ([`ecs::StochasticCollisionPlugin`], collision events, budgets, responses).
 #![warn(missing_docs)]
 
 pub mod adb;

@@ -79,4 +79,17 @@ fn tracked_pairs_run_in_the_tracking_stage() {
         .get::<stochastic_collision::ecs::FeaturePairs>(first)
         .expect("feature pairs kept on the first entity");
     assert!(!features.with(a.max(b)).is_empty());
+    // Apart: the partner's feature pairs are dropped.
+    app.world_mut()
+        .get_mut::<ColliderPose>(b)
+        .unwrap()
+        .0
+        .translation
+        .x = 10.0;
+    app.update();
+    let features = app
+        .world()
+        .get::<stochastic_collision::ecs::FeaturePairs>(first)
+        .unwrap();
+    assert!(features.partners.is_empty());
 }

@@ -168,3 +168,58 @@ pub fn end_frame(mut diag: ResMut<CollisionDiagnostics>, config: Res<CollisionCo
         diag.counters.overrun_runs += 1;
     }
 }
+
+/// Publishing the stage timings to bevy_diagnostic's `DiagnosticsStore` (feature `diagnostic`):
+/// paths `stochastic_collision/<stage>` in µs (a stage that did not run adds no measurement) and
+/// `stochastic_collision/collision` (Prepare to Report). Add bevy_diagnostic's
+/// `DiagnosticsPlugin` to the app to collect them.
+#[cfg(feature = "diagnostic")]
+pub mod store {
+    use bevy_app::App;
+    use bevy_diagnostic::{
+        Diagnostic, DiagnosticPath, Diagnostics, DiagnosticsStore, RegisterDiagnostic,
+    };
+    use bevy_ecs::intern::Interned;
+    use bevy_ecs::prelude::*;
+    use bevy_ecs::schedule::ScheduleLabel;
+
+    use super::{CollisionDiagnostics, Stage};
+    use crate::ecs::CollisionSystems;
+
+    /// The path of each stage, in [`Stage::ALL`] order.
+    pub const STAGE_PATHS: [DiagnosticPath; 8] = [
+        DiagnosticPath::const_new("stochastic_collision/prepare"),
+        DiagnosticPath::const_new("stochastic_collision/refit"),
+        DiagnosticPath::const_new("stochastic_collision/broad_phase"),
+        DiagnosticPath::const_new("stochastic_collision/narrow_phase"),
+        DiagnosticPath::const_new("stochastic_collision/self_collision"),
+        DiagnosticPath::const_new("stochastic_collision/tracking"),
+        DiagnosticPath::const_new("stochastic_collision/report"),
+        DiagnosticPath::const_new("stochastic_collision/response"),
+    ];
+
+    /// The collision stages in all (Prepare to Report).
+    pub const COLLISION_PATH: DiagnosticPath =
+        DiagnosticPath::const_new("stochastic_collision/collision");
+
+    pub(crate) fn register(app: &mut App, schedule: Interned<dyn ScheduleLabel>) {
+        for path in STAGE_PATHS.iter().chain([&COLLISION_PATH]) {
+            app.register_diagnostic(Diagnostic::new(path.clone()).with_suffix("us"));
+        }
+        app.add_systems(
+            schedule,
+            publish
+                .after(CollisionSystems::Response)
+                .run_if(resource_exists::<DiagnosticsStore>),
+        );
+    }
+
+    fn publish(d: Res<CollisionDiagnostics>, mut out: Diagnostics) {
+        for (stage, path) in Stage::ALL.iter().zip(&STAGE_PATHS) {
+            if let Some(t) = d.stage(*stage).last {
+                out.add_measurement(path, || t.as_secs_f64() * 1e6);
+            }
+        }
+        out.add_measurement(&COLLISION_PATH, || d.collision_time.as_secs_f64() * 1e6);
+    }
+}

@@ -49,6 +49,8 @@ pub use components::{
     Fidelity, SelfCollision,
 };
 pub use contact::ContactPoint;
+#[cfg(feature = "diagnostic")]
+pub use diagnostics::store as diagnostics_store;
 pub use diagnostics::{CollisionCounters, CollisionDiagnostics, Stage, StageRecord};
 pub use events::{
     CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact, ContactQueue,
@@ -59,8 +61,8 @@ pub use plugin::{CollisionConfig, FrameBudget, StochasticCollisionPlugin};
 pub use pool::CollisionTaskPool;
 pub use prepare::{ColliderEntry, ColliderFrame, Geometry, PrepareState};
 pub use response::{
-    ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Velocity,
-    impulse_response, integrate_velocities, penalty_response,
+    ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Rest,
+    Velocity, impulse_response, integrate_velocities, penalty_response, sleep_bodies,
 };
 pub use schedule::CollisionSystems;
 pub use tracking_systems::{FeaturePairs, TrackingState};

@@ -44,10 +44,11 @@ pub enum Method {
     Cached,
     /// Not tested: the time budget's deadline passed before the pair's turn. A pair that
     /// collided in the previous run keeps that answer and contact (temporal coherence); any
-    /// other pair gets the oriented root-box test, conservatively: overlapping boxes count as
-    /// a contact with probability 0.5 and a box contact (a false contact pushes apart gently,
-    /// a missed one lets bodies sink into each other). Either way the pair waits less in the
-    /// next run.
+    /// other pair gets the oriented root-box test: for an exact pair, overlapping boxes count
+    /// as a contact with probability 0.5 and a box contact (level geometry must not be passed
+    /// through); the others keep "not colliding" (with the last probability). Reused contacts
+    /// have depth 0 (they stop approach without pushing the same correction twice). Either way
+    /// the pair waits less in the next run.
     Coherence,
 }
 
@@ -227,7 +228,7 @@ pub fn narrow_phase(
             last,
         });
     }
-    let (total, deadline) = node_budget(&config, &diag, state, start);
+    let (total, deadline) = node_budget(&config, &diag, state, Instant::now());
     let mut adb_pairs = 0u64;
     if let Some(total) = total {
         let adb: Vec<usize> = (0..jobs.len())
@@ -324,8 +325,14 @@ fn node_budget(
         FrameBudget::NodePairs(n) => (Some(n), None),
         FrameBudget::Time(budget) => {
             let spent = now.saturating_duration_since(diag.frame_start);
-            let reserve = diag.reserve_after_narrow() + state.overhead;
-            let left = budget.saturating_sub(spent).saturating_sub(reserve);
+            // The serial overhead is about half before the tests (spent by now), half after.
+            let reserve = diag.reserve_after_narrow() + state.overhead / 2;
+            // At least a quarter of the budget goes to tests, whatever the overhead: without
+            // tests nothing ever settles (and pairs that stopped moving cannot be cached).
+            let left = budget
+                .saturating_sub(spent)
+                .saturating_sub(reserve)
+                .max(budget / 4);
             let work = left.as_secs_f64() * 1e6 * state.rate.node_pairs_per_us;
             let adb_work = (work - state.exact_node_pairs).max(0.0);
             (Some(adb_work as u64), Some(now + left))
@@ -361,20 +368,24 @@ impl Context<'_> {
                         &self.entries[job.pair.a as usize],
                         &self.entries[job.pair.b as usize],
                     );
-                    let memory = PairMemory {
-                        probability: o.probability,
-                        collides: o.collides,
-                        settled: !o.budget_exhausted
-                            && o.method != Method::Coherence
-                            && both_rigid(ea, eb),
-                        stale: match (o.method, job.last) {
-                            (Method::Coherence | Method::Cached, Some(i)) => {
-                                self.memory[i as usize].stale + 1
-                            }
-                            _ => 0,
+                    // An answer from memory keeps the memory (with the poses it was computed
+                    // at, so a pair that stops moving can be cached); a test makes a new one.
+                    let memory = match (o.method, job.last) {
+                        (Method::Coherence, Some(i)) => PairMemory {
+                            stale: self.memory[i as usize].stale + 1,
+                            ..self.memory[i as usize]
                         },
-                        poses: (ea.pose, eb.pose),
-                        contact: o.contacts.first().copied(),
+                        (Method::Cached, Some(i)) => self.memory[i as usize],
+                        _ => PairMemory {
+                            probability: o.probability,
+                            collides: o.collides,
+                            settled: !o.budget_exhausted
+                                && o.method != Method::Coherence
+                                && both_rigid(ea, eb),
+                            stale: 0,
+                            poses: (ea.pose, eb.pose),
+                            contact: o.contacts.first().copied(),
+                        },
                     };
                     (job.pos, o, memory)
                 })
@@ -427,18 +438,24 @@ impl Context<'_> {
                     Some(m) if m.collides => {
                         out.collides = true;
                         out.probability = m.probability;
-                        out.contacts.extend(m.contact);
+                        // The old contact without its depth: it stops approach (an impulse)
+                        // but does not push the same correction twice.
+                        out.contacts
+                            .extend(m.contact.map(|c| ContactPoint { depth: 0.0, ..c }));
                     }
-                    // New, or apart last time: err on the side of a contact (a false contact
-                    // pushes apart gently; a missed one lets bodies sink into each other).
-                    _ if root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) => {
+                    // An exact pair (level geometry, things that must not pass through each
+                    // other), new or apart last time: err on the side of a contact.
+                    _ if job.method == Method::Exact
+                        && root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) =>
+                    {
                         out.collides = true;
                         out.probability = 0.5;
                         let mut c = bounds_contact(ea, eb);
                         c.depth *= 0.5;
                         out.contacts.push(c);
                     }
-                    _ => {}
+                    // Other pairs: "not colliding", as uncertain as last time.
+                    _ => out.probability = last.map_or(0.5, |m| m.probability),
                 }
             }
             Method::Exact if both_rigid(ea, eb) => {

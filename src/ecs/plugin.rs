@@ -18,7 +18,8 @@ use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderFrame, PrepareState, gather_colliders, refit_deformables};
 use super::schedule::CollisionSystems;
 use super::tracking_systems::{
-    TrackingState, forget_untracked, needs_self_pass, needs_tracking, self_collision, track_pairs,
+    FeaturePairs, TrackingState, forget_untracked, needs_self_pass, needs_tracking,
+    prune_feature_pairs, self_collision, track_pairs,
 };
 
 /// How much work the collision stages (Prepare to Report) may do per run.
@@ -198,6 +199,7 @@ impl Plugin for StochasticCollisionPlugin {
                     narrow_phase.in_set(NarrowPhase),
                     (
                         self_collision.run_if(needs_self_pass),
+                        prune_feature_pairs.run_if(any_with_component::<FeaturePairs>),
                         track_pairs.run_if(needs_tracking),
                         forget_untracked,
                     )
@@ -215,6 +217,6 @@ impl Plugin for StochasticCollisionPlugin {
                 .before(refit_deformables),
         );
         #[cfg(feature = "diagnostic")]
-        super::diagnostics::register_store(app, s);
+        super::diagnostics::store::register(app, s);
     }
 }

@@ -23,10 +23,11 @@ impl CollisionTaskPool {
                 own: None,
                 inline: true,
             },
+            // The calling thread helps (it ticks the pool while it waits): n − 1 pool threads.
             Some(n) => Self {
                 own: Some(
                     TaskPoolBuilder::new()
-                        .num_threads(n)
+                        .num_threads(n - 1)
                         .thread_name("stochastic_collision".into())
                         .build(),
                 ),
@@ -40,7 +41,7 @@ impl CollisionTaskPool {
         if self.inline {
             1
         } else if let Some(pool) = &self.own {
-            pool.thread_num()
+            pool.thread_num() + 1
         } else {
             compute_pool().thread_num().max(1)
         }
@@ -60,8 +61,8 @@ impl CollisionTaskPool {
         }
         let f = &f;
         match &self.own {
-            // Own threads only: the calling thread waits (exactly `n` threads work).
-            Some(pool) => pool.scope_with_executor(false, None, |s| {
+            // The pool's threads and the calling thread: exactly `n` threads work.
+            Some(pool) => pool.scope(|s| {
                 for c in items.chunks(chunk) {
                     s.spawn(async move { f(c) });
                 }
@@ -90,7 +91,7 @@ impl CollisionTaskPool {
         let f = &f;
         match &self.own {
             Some(pool) => {
-                pool.scope_with_executor(false, None, |s| {
+                pool.scope(|s| {
                     for c in items.chunks_mut(chunk) {
                         s.spawn(async move { c.iter_mut().for_each(f) });
                     }
@@ -118,4 +119,28 @@ fn compute_pool() -> &'static ComputeTaskPool {
             .num_threads(bevy_tasks::available_parallelism())
             .build()
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn threads_used(pool: &CollisionTaskPool) -> usize {
+        let items: Vec<u32> = (0..16).collect();
+        let ids = pool.map_chunks(&items, 2, |_| {
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            std::thread::current().id()
+        });
+        let mut ids: Vec<String> = ids.iter().map(|id| format!("{id:?}")).collect();
+        ids.sort();
+        ids.dedup();
+        ids.len()
+    }
+
+    #[test]
+    fn own_pool_runs_chunks_on_that_many_threads() {
+        assert_eq!(threads_used(&CollisionTaskPool::new(Some(1))), 1);
+        assert_eq!(threads_used(&CollisionTaskPool::new(Some(2))), 2);
+        assert_eq!(threads_used(&CollisionTaskPool::new(Some(3))), 3);
+    }
 }

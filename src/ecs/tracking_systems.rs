@@ -260,6 +260,43 @@ fn record_pairs(
     }
 }
 
+/// Drops the feature pairs of partners that are no longer tracked (apart, despawned, or
+/// changed fidelity), so each entity's lists hold only live pairs; a self-colliding mesh
+/// keeps its own.
+pub fn prune_feature_pairs(
+    frame: Res<ColliderFrame>,
+    outcomes: Res<PairOutcomes>,
+    mut q: Query<(Entity, &mut FeaturePairs)>,
+) {
+    let mut live: Vec<(Entity, Entity)> = outcomes
+        .tracked
+        .iter()
+        .map(|p| {
+            (
+                frame.entries[p.a as usize].entity,
+                frame.entries[p.b as usize].entity,
+            )
+        })
+        .chain(
+            frame
+                .entries
+                .iter()
+                .filter(|e| e.self_collision)
+                .map(|e| (e.entity, e.entity)),
+        )
+        .collect();
+    live.sort_unstable();
+    for (owner, mut f) in &mut q {
+        if f.partners
+            .iter()
+            .any(|(p, _)| live.binary_search(&(owner, *p)).is_err())
+        {
+            f.partners
+                .retain(|(p, _)| live.binary_search(&(owner, *p)).is_ok());
+        }
+    }
+}
+
 /// Run condition: some deformable mesh has the [`SelfCollision`] marker.
 pub fn needs_self_pass(q: Query<(), (With<SelfCollision>, With<Deformable>)>) -> bool {
     !q.is_empty()
