@@ -62,6 +62,10 @@ pub fn setup(app: &mut App, options: &Options) {
             Deformable::new(mesh),
             state,
             SelfCollision,
+            // Self-collision by stochastic tracking (the ball and the floor stay exact).
+            Fidelity::Tracking {
+                pairs_per_frame: 16,
+            },
             ColliderPose(Pose::new(
                 Vec3::new(0.1 * k as f32, 0.8 + 0.3 * k as f32, 0.0),
                 turn,

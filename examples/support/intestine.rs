@@ -85,6 +85,10 @@ pub fn setup(app: &mut App, options: &Options) {
         world.spawn((
             Deformable::new(mesh.clone()),
             SelfCollision,
+            // Self-collision by stochastic tracking, as in the surgery simulators.
+            Fidelity::Tracking {
+                pairs_per_frame: 256,
+            },
             Peristalsis {
                 normals: normals.clone(),
                 phase: phase.clone(),
