@@ -3,7 +3,7 @@
 //! runs and what each found.
 mod fuzz_checks;
 
-use fuzz_checks::TriTriInput;
+use fuzz_checks::{MeshInput, MeshQueryInput, TriTriInput};
 
 /// `tri_tri`, run 1 (crash-e0aeaa4d…): a NaN corner. `triangles_intersect` said "intersecting"
 /// and `closest_points_triangle_triangle` then hit its debug assertion that an intersection
@@ -66,4 +66,57 @@ fn tri_tri_coplanar_scaled_up() {
         [-1, -8, 93],
         [-1, -11, 0],
     ]));
+}
+
+/// `mesh_query`, run 1 (crash-9139f371…): `closest_points` with no distance limit answered
+/// `None` for finite poses whose translation is near `f32::MAX`.
+#[test]
+fn mesh_query_closest_points_near_f32_max() {
+    let mesh = |positions: Vec<[f32; 3]>, triangles: Vec<[u8; 3]>| MeshInput {
+        positions,
+        triangles,
+        grid: 0,
+    };
+    fuzz_checks::mesh_query(&MeshQueryInput {
+        a: mesh(
+            vec![
+                [-1.6654e35, -6.490_371e35, 3.470_346_8e-25],
+                [14_668_745_000_000.0, 1.116_144_2e-13, 3.774_425_2e-14],
+                [-1.52422e26, 3.756_151e-14, 3.774_353_4e-14],
+            ],
+            vec![
+                [41, 41, 58],
+                [252, 234, 121],
+                [41, 41, 85],
+                [41, 41, 252],
+                [41, 41, 41],
+                [252, 234, 126],
+                [41, 41, 250],
+                [250, 41, 122],
+                [41, 41, 41],
+            ],
+        ),
+        b: mesh(vec![], vec![[41, 41, 249], [250, 127, 127], [0, 0, 0]]),
+        same: true,
+        pose_a: (
+            [3.396_176_3e38, 5.51012e-40, 9.334_581e-15],
+            [
+                9.334_581e-15,
+                -1.180_104e-38,
+                -1.180_104e-38,
+                -1.180_104e-38,
+            ],
+        ),
+        pose_b: (
+            [-1.180_104e-38, -1.180_104e-38, 9.351_352e-15],
+            [
+                9.334_581e-15,
+                3.76567e-39,
+                14_660_155_000_000.0,
+                4.781_360_4e-14,
+            ],
+        ),
+        fit: true,
+        budget: 43,
+    });
 }
