@@ -3,7 +3,7 @@
 //! runs and what each found.
 mod fuzz_checks;
 
-use fuzz_checks::{MeshInput, MeshQueryInput, TriTriInput};
+use fuzz_checks::{MeshInput, MeshQueryInput, ProbabilityInput, TriTriInput};
 
 /// `tri_tri`, run 1 (crash-e0aeaa4d…): a NaN corner. `triangles_intersect` said "intersecting"
 /// and `closest_points_triangle_triangle` then hit its debug assertion that an intersection
@@ -118,5 +118,78 @@ fn mesh_query_closest_points_near_f32_max() {
         ),
         fit: true,
         budget: 43,
+    });
+}
+
+/// `probability`, run 2 (crash-6ab21f95…): a bug of the check, not of the model. Boxes with
+/// infinite sides have an infinite overlap volume, which `overlap_volume` documents (never
+/// NaN); the check demanded a finite one. It now does so only for finite sides.
+#[test]
+fn probability_infinite_box_sides() {
+    fuzz_checks::probability(&ProbabilityInput {
+        s: 2_137_877_869,
+        s_a: 2_139_070_591,
+        s_b: 2_139_062_143,
+        x: 127,
+        x_max: 127,
+        lb: 4.128_269_8e-317,
+        sides_a: [f32::INFINITY, 8.65661e-19, 1.170_882e-38],
+        sides_b: [0.0, f32::INFINITY, 8.65661e-19],
+        d: 2.475_987_8e27,
+        wf: [1_835_887_981, 1_835_887_981],
+        cells: 1_835_887_981,
+        depths: [627_928_429, 1_835_887_981, 1_835_887_981, 4_128_064_126],
+        small: false,
+    });
+}
+
+/// `mesh_query`, run 2 (slow-unit-4871357b…, 10 s under load): 22 triangles that are all the
+/// same point. The ADB calibration fit looks for near-contact poses; for meshes of zero extent
+/// every attempt scanned 64 offsets that were all 0 (each an exact query over all pairs), 40
+/// attempts per build. Now a single offset is tried.
+#[test]
+fn mesh_query_mesh_of_one_point() {
+    let mut triangles = vec![[255, 251, 251]];
+    triangles.extend([[251; 3]; 5]);
+    triangles.extend([[255; 3]; 12]);
+    triangles.extend([[251; 3]; 3]);
+    triangles.push([250; 3]);
+    fuzz_checks::mesh_query(&MeshQueryInput {
+        a: MeshInput {
+            positions: vec![
+                [3.5e-43, 0.0, -5.580_381_4e35],
+                [6e-45, 0.0, -4.552_103e36],
+                [4.353_815_5e-16, 1.114_611_5e-13, 3.763_496_5e-14],
+                [5.8531e-41, 3.756_196_7e-14, 1.5005e-41],
+            ],
+            triangles,
+            grid: 250,
+        },
+        b: MeshInput {
+            positions: vec![],
+            triangles: vec![],
+            grid: 250,
+        },
+        same: true,
+        pose_a: (
+            [2.890_147_2e-14, 5.7e-44, 5.5e-44],
+            [
+                3.763_128_2e-14,
+                3.756_124e-14,
+                -2.195_832_5e35,
+                -6.541_784_6e35,
+            ],
+        ),
+        pose_b: (
+            [3.774_323_2e-14, 1.074_491_7e-38, 1.637_307_4e32],
+            [
+                -2.598_501_2e36,
+                1.525_160_5e35,
+                -3.697_314e28,
+                -2.450_560_3e36,
+            ],
+        ),
+        fit: true,
+        budget: 251,
     });
 }
