@@ -106,6 +106,10 @@ pub fn first_contact_distance(
     // Beyond ra + rb the bounding spheres are apart: no contact. Scan inwards for a touching
     // offset, then bisect the last gap.
     let far = (ra + rb) * 1.001;
+    if far <= 0.0 {
+        // Two single points (meshes of zero extent): only the offset 0 can touch.
+        return hit(0.0, ws).then_some(0.0);
+    }
     const STEPS: usize = 64;
     let mut outside = far;
     let mut inside = None;

@@ -22,9 +22,9 @@ fn non_finite_poses() -> Vec<Pose> {
         Pose::from_translation(Vec3::new(nan, 0.0, 0.0)),
         Pose::from_translation(Vec3::new(0.0, inf, 0.0)),
         Pose::from_translation(Vec3::new(0.0, 0.0, -inf)),
-        // Fields are public: an unnormalised rotation whose squared length overflows.
+        // Fields are public: a zero rotation.
         Pose {
-            rotation: Quat::from_xyzw(1e20, 0.0, 0.0, 1.0),
+            rotation: Quat::from_xyzw(0.0, 0.0, 0.0, 0.0),
             translation: Vec3::ZERO,
         },
     ]
@@ -77,6 +77,47 @@ fn a_pose_that_is_not_finite_places_its_mesh_nowhere() {
         &Pose::IDENTITY,
         &mut ws
     ));
+    // An unnormalised rotation whose squared length overflows f32 (the fields are public) is
+    // still a rotation: queries normalise it in f64.
+    let big = Pose {
+        rotation: Quat::from_xyzw(1e20, 0.0, 0.0, 1.0),
+        translation: Vec3::new(0.5, 0.0, 0.0),
+    };
+    assert!(big.is_finite());
+    assert!(intersects(&ball, &Pose::IDENTITY, &ball, &big, &mut ws));
+    let far = Pose {
+        translation: Vec3::new(2.5, 0.0, 0.0),
+        ..big
+    };
+    assert!(!intersects(&ball, &Pose::IDENTITY, &ball, &far, &mut ws));
+}
+
+/// Two finite poses so far apart that their offset exceeds the `f32` range: there is no
+/// relative pose to compute with, so the meshes are nowhere near each other (no collision, no
+/// distance). Just inside the range, the relative pose is exact (computed in `f64`).
+#[test]
+fn poses_farther_apart_than_the_f32_range() {
+    let ball = CollisionMesh::new(generate::icosphere(1.0, 2));
+    let mut ws = QueryWorkspace::new();
+    let (east, west) = (
+        Pose::from_translation(Vec3::new(f32::MAX, 0.0, 0.0)),
+        Pose::from_translation(Vec3::new(-f32::MAX, 0.0, 0.0)),
+    );
+    assert!(east.is_finite() && west.is_finite() && !east.inverse_mul(&west).is_finite());
+    assert!(!intersects(&ball, &east, &ball, &west, &mut ws));
+    assert_eq!(
+        closest_points(&ball, &east, &ball, &west, f32::INFINITY, &mut ws),
+        None
+    );
+    // A half-turn about x at f32::MAX: the f32 rotation of the translation overflowed before.
+    let turned = Pose::new(
+        Vec3::new(f32::MAX, 0.0, 0.0),
+        Quat::from_xyzw(1.0, 0.0, 0.0, 0.0),
+    );
+    let beside = Pose::from_translation(Vec3::new(f32::MAX, 0.0, 0.0));
+    let rel = turned.inverse_mul(&beside);
+    assert!(rel.is_finite() && rel.translation == Vec3::ZERO, "{rel:?}");
+    assert!(intersects(&ball, &turned, &ball, &beside, &mut ws));
 }
 
 /// Translations up to the top of the `f32` range: the box tests' rounding margin used to

@@ -27,7 +27,7 @@ impl Pose {
     };
 
     /// A pose from its parts. The rotation is normalised; one that cannot be (zero, NaN,
-    /// infinite, or so large that its squared length overflows) gives a pose that is not
+    /// infinite, or so large that its squared length overflows `f32`) gives a pose that is not
     /// [finite](Pose::is_finite).
     #[inline]
     pub fn new(translation: Vec3, rotation: Quat) -> Self {
@@ -46,8 +46,8 @@ impl Pose {
         }
     }
 
-    /// Whether the translation is finite and the rotation can be normalised (finite, not zero,
-    /// squared length not overflowing). Queries given a pose that is not (NaN or infinite
+    /// Whether the translation is finite and the rotation can be normalised (finite and not
+    /// zero; queries normalise it in `f64`). Queries given a pose that is not (NaN or infinite
     /// parts, a zero rotation) place that mesh nowhere: no collision, no distance, probability
     /// 0, rather than an answer computed from NaN. Check this before querying to report such a
     /// pose as an error.
@@ -61,7 +61,7 @@ impl Pose {
     /// ```
     #[inline]
     pub fn is_finite(&self) -> bool {
-        let len2 = self.rotation.length_squared();
+        let len2 = self.rotation.as_dquat().length_squared();
         self.translation.is_finite() && len2.is_finite() && len2 > 0.0
     }
 
@@ -97,9 +97,23 @@ impl Pose {
     }
 
     /// `self⁻¹ * other`: the pose of `other`'s frame seen from `self`'s frame.
+    ///
+    /// When the `f32` computation overflows (poses near the limits of the `f32` range, or a
+    /// rotation whose squared length overflows) it is redone in `f64` and rounded once, so the
+    /// result is not [finite](Pose::is_finite) only when a pose is not, or when the two frames
+    /// are farther apart than the `f32` range.
     #[inline]
     pub fn inverse_mul(&self, other: &Pose) -> Pose {
-        self.inverse().mul(other)
+        let rel = self.inverse().mul(other);
+        if rel.is_finite() || !(self.is_finite() && other.is_finite()) {
+            return rel;
+        }
+        let (a, b) = (self.to_f64(), other.to_f64());
+        let r = a.rotation.inverse();
+        Pose {
+            rotation: (r * b.rotation).normalize().as_quat(),
+            translation: (r * (b.translation - a.translation)).as_vec3(),
+        }
     }
 
     /// This pose in `f64`, for exact work on transformed geometry.
