@@ -1,0 +1,130 @@
+//! Runtime input the ECS must survive: infinite poses and vertices, a collider swapped in the
+//! middle of a contact (rigid and tracked), and a tracked deformable that turns bad: the bad
+//! entity is reported and skipped, the rest go on, and events stay consistent.
+mod plugin_support;
+
+use plugin_support::*;
+use stochastic_collision::ecs::{CollisionErrorKind, TrackingState};
+use stochastic_collision::prelude::*;
+
+#[test]
+fn infinite_pose_is_an_error_for_that_entity_only() {
+    let mut app = app();
+    let ball = ball(1.0);
+    let a = spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0)));
+    let b = spawn(&mut app, (ball.clone(), at(1.5, 0.0, 0.0)));
+    let c = spawn(&mut app, (ball, at(20.0, 0.0, 0.0)));
+    app.update();
+    app.world_mut()
+        .get_mut::<ColliderPose>(c)
+        .unwrap()
+        .0
+        .translation
+        .x = f32::INFINITY;
+    for _ in 0..3 {
+        app.update();
+    }
+    let l = log(&app);
+    assert_eq!(l.errors.len(), 1);
+    assert_eq!(l.errors[0].entity, c);
+    assert!(matches!(
+        l.errors[0].kind,
+        CollisionErrorKind::InvalidPose { .. }
+    ));
+    assert_eq!(l.started, vec![pair(a, b)]);
+    assert!(l.ended.is_empty());
+}
+
+#[test]
+fn swapping_a_collider_mid_contact_ends_and_restarts_consistently() {
+    for fidelity in [
+        Fidelity::Exact,
+        Fidelity::Tracking {
+            pairs_per_frame: 16,
+        },
+    ] {
+        let mut app = app();
+        let a = spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0), fidelity));
+        let b = spawn(&mut app, (ball(1.0), at(1.5, 0.0, 0.0), fidelity));
+        for _ in 0..3 {
+            app.update();
+        }
+        assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
+        // A smaller mesh no longer reaches the other: the contact ends, once.
+        app.world_mut().entity_mut(b).insert(ball(0.2));
+        for _ in 0..3 {
+            app.update();
+        }
+        assert_eq!(log(&app).ended, vec![pair(a, b)], "{fidelity:?}");
+        assert!(!app.world().get::<CollidingEntities>(a).unwrap().contains(b));
+        // A larger one reaches it again: started again, once.
+        app.world_mut().entity_mut(b).insert(ball(1.0));
+        for _ in 0..3 {
+            app.update();
+        }
+        let l = log(&app);
+        assert_eq!(l.started, vec![pair(a, b), pair(a, b)], "{fidelity:?}");
+        assert!(l.errors.is_empty());
+        for c in &l.contacts {
+            assert!(c.point.is_finite() && c.normal.is_finite() && c.depth.is_finite());
+        }
+    }
+}
+
+#[test]
+fn a_tracked_deformable_with_an_infinite_vertex_is_skipped_and_recovers() {
+    let mut app = app();
+    let tracked = Fidelity::Tracking {
+        pairs_per_frame: 16,
+    };
+    let cloth_mesh = generate::cloth_grid(1.0, 1.0, 12, 12);
+    let cloth = spawn(
+        &mut app,
+        (
+            Deformable::new(cloth_mesh.clone()),
+            SelfCollision,
+            tracked,
+            at(0.0, 0.0, 0.0),
+        ),
+    );
+    let a = spawn(&mut app, (ball(1.0), at(10.0, 0.0, 0.0)));
+    let b = spawn(&mut app, (ball(1.0), at(11.5, 0.0, 0.0)));
+    app.update();
+    app.world_mut()
+        .get_mut::<Deformable>(cloth)
+        .unwrap()
+        .positions_mut()[5]
+        .y = f32::NEG_INFINITY;
+    for _ in 0..3 {
+        app.update();
+    }
+    let l = log(&app);
+    assert_eq!(l.errors.len(), 1);
+    assert_eq!(l.errors[0].entity, cloth);
+    assert_eq!(l.started, vec![pair(a, b)]);
+    // While it is bad, nothing is tracked for it.
+    assert!(
+        app.world()
+            .resource::<TrackingState>()
+            .tracker(cloth, cloth)
+            .is_none()
+    );
+    // Fixed: tracked again, no contact on a flat sheet, no further error.
+    app.world_mut()
+        .get_mut::<Deformable>(cloth)
+        .unwrap()
+        .positions_mut()
+        .copy_from_slice(cloth_mesh.positions());
+    for _ in 0..3 {
+        app.update();
+    }
+    let l = log(&app);
+    assert_eq!(l.errors.len(), 1);
+    assert_eq!(l.started, vec![pair(a, b)]);
+    assert!(
+        app.world()
+            .resource::<TrackingState>()
+            .tracker(cloth, cloth)
+            .is_some()
+    );
+}
