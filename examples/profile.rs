@@ -15,7 +15,8 @@
 //! `p50_us`, `p99_us` over the frames the stage ran, `runs`), `collision_p99_us` (Prepare to
 //! Report), `overrun_frames` (collision time above the budget), `events` (`started`, `ended`,
 //! `contacts`), `events_deferred` (contacts left for a later frame by the response budget),
-//! `events_lost` (written but never read by a reader that runs every other frame), and
+//! `events_lost` (written but never read by a reader that runs every other frame), `memory`
+//! (resident MiB after a tenth of the run and at the end, and the growth), and
 //! `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms).
 mod support;
 
@@ -100,7 +101,13 @@ fn main() {
     let mut ws = QueryWorkspace::new();
     let (mut sampled, mut agreed) = (0u64, 0u64);
     let run = Instant::now();
+    // Resident memory after a tenth of the run (warm-up: queues, pools and pair tables grown)
+    // and at the end: growth means something keeps accumulating.
+    let mut rss_warm = None;
     for frame in 0..args.frames {
+        if frame == args.frames / 10 {
+            rss_warm = resident_bytes();
+        }
         if frame + 1 == args.frames {
             app.world_mut().resource_mut::<tally::Tally>().last = true;
         }
@@ -134,14 +141,22 @@ fn main() {
         }
     }
     let wall = run.elapsed();
+    let memory = (rss_warm, resident_bytes());
     report(
         &args,
         &mut app,
         &records,
         (sampled, agreed),
-        build_time,
-        wall,
+        (build_time, wall),
+        memory,
     );
+}
+
+/// Resident set size of this process (Linux `/proc/self/statm`), if known.
+fn resident_bytes() -> Option<u64> {
+    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
+    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(pages * 4096)
 }
 
 fn percentile(sorted: &[f64], q: f64) -> f64 {
@@ -168,9 +183,14 @@ fn report(
     app: &mut bevy_app::App,
     records: &[FrameRecord],
     (sampled, agreed): (u64, u64),
-    build_time: std::time::Duration,
-    wall: std::time::Duration,
+    (build_time, wall): (std::time::Duration, std::time::Duration),
+    (rss_warm, rss_end): (Option<u64>, Option<u64>),
 ) {
+    let mib = |b: Option<u64>| b.map_or(-1.0, |b| b as f64 / (1024.0 * 1024.0));
+    let growth = match (rss_warm, rss_end) {
+        (Some(w), Some(e)) => (e as f64 - w as f64) / (1024.0 * 1024.0),
+        _ => 0.0,
+    };
     let world = app.world_mut();
     let lost = tally::lost(world);
     let d = world.resource::<CollisionDiagnostics>().clone();
@@ -235,6 +255,11 @@ fn report(
         c.started, c.ended, c.contacts
     );
     println!(
+        "memory: {:.1} MiB resident after a tenth of the run, {:.1} MiB at the end ({growth:+.1} MiB)",
+        mib(rss_warm),
+        mib(rss_end)
+    );
+    println!(
         "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} past the deadline), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs",
         c.node_pairs,
         c.adb_pairs,
@@ -246,7 +271,7 @@ fn report(
     );
     if let Some(path) = &args.json {
         let json = format!(
-            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}}}\n}}\n",
+            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}}}\n}}\n",
             args.scene.name(),
             records.len(),
             args.options.threads,
@@ -259,6 +284,8 @@ fn report(
             c.started,
             c.ended,
             c.contacts,
+            mib(rss_warm),
+            mib(rss_end),
             c.node_pairs,
             c.adb_pairs,
             c.budget_exhausted_pairs,
