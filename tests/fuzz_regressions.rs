@@ -193,3 +193,48 @@ fn mesh_query_mesh_of_one_point() {
         budget: 251,
     });
 }
+
+/// `mesh_query`, run 3 (crash-56057365…): coordinates near `f32::MAX`. The `f32` box-distance
+/// lower bound overflowed to +∞ and pruned the pair at distance 0, so `closest_points`
+/// answered +∞. An overflowing bound is now 0, and an overflowing box test does not cull.
+#[test]
+fn mesh_query_boxes_near_f32_max() {
+    let far = 3.396_151_4e38;
+    let mut triangles = vec![[41, 41, 255]];
+    triangles.extend([[255; 3]; 11]);
+    triangles.extend([[255, 255, 0], [33, 41, 0], [41, 1, 122]]);
+    let tiny = -1.974_495e-11;
+    fuzz_checks::mesh_query(&MeshQueryInput {
+        a: MeshInput {
+            positions: vec![
+                [-6.510_676e35, -33_554_436.0, 0.0],
+                [-1.974_472_1e-11, tiny, tiny],
+                [3.334_268e-14, 3.752_814e-14, 1.4708e-41],
+                [2.312_865e38, far, far],
+                [far; 3],
+                [far; 3],
+                [far; 3],
+                [far, 2.858_388_6e-14, 3.773_205e-39],
+                [1.474_142_85e-36, -1.009_317_2e37, 3.334_31e-14],
+            ],
+            triangles,
+            grid: 0,
+        },
+        b: MeshInput {
+            positions: vec![],
+            triangles: vec![],
+            grid: 0,
+        },
+        same: true,
+        pose_a: (
+            [541_515_150_000.0, 225_831_060_000.0, -7.331_54e-12],
+            [tiny; 4],
+        ),
+        pose_b: (
+            [tiny, tiny, -1.974_470_4e-11],
+            [tiny, -7.428_208e-12, 7.105_502_4e-12, 3.752_553_8e-14],
+        ),
+        fit: true,
+        budget: 173,
+    });
+}

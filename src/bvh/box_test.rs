@@ -61,6 +61,9 @@ impl RelativeFrame {
     #[inline]
     pub(crate) fn overlap(&self, a: &BvhNode, b: &BvhNode) -> bool {
         let (t, ea, eb) = self.setup(a, b);
+        if !t.is_finite() {
+            return true; // overflow (boxes near the limits of the f32 range): cannot cull
+        }
         let ra = ea + self.abs_rot * eb + Vec3::splat(self.margin);
         if t.abs().cmpgt(ra).any() {
             return false;
@@ -103,14 +106,17 @@ impl RelativeFrame {
         d - r > hi + self.margin || d + r < lo - self.margin
     }
 
-    /// A lower bound on the distance between the boxes (largest gap along the six axes).
+    /// A lower bound on the distance between the boxes (largest gap along the six axes); 0
+    /// when the `f32` arithmetic overflowed (boxes near the limits of the range), which is
+    /// conservative.
     #[inline]
     pub(crate) fn distance_lower_bound(&self, a: &BvhNode, b: &BvhNode) -> f32 {
         let (t, ea, eb) = self.setup(a, b);
         let gap_a = t.abs() - ea - self.abs_rot * eb;
         let tb = self.rot_t * t;
         let gap_b = tb.abs() - eb - self.abs_rot_t * ea;
-        (gap_a.max(gap_b).max_element() - self.margin).max(0.0)
+        let lb = gap_a.max(gap_b).max_element() - self.margin;
+        if lb.is_finite() { lb.max(0.0) } else { 0.0 }
     }
 }
 
