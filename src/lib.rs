@@ -8,7 +8,9 @@
 //! ([`geometry`]), and a bounding-volume hierarchy ([`bvh::CollisionMesh`]) that answers "do
 //! these two meshes touch?", "which triangle pairs intersect?", "how far apart are they?" and
 //! "does this mesh intersect itself?". On top of it, ADB-trees ([`adb`]) answer "do they
-//! collide?" with a confidence, inside a node-pair or time budget.
+//! collide?" with a confidence, inside a node-pair or time budget, and stochastic
+//! closest-feature tracking ([`tracking`]) follows the contacts of deforming, self-colliding
+//! meshes in a small time per frame.
 //!
 //! ```
 //! use stochastic_collision::prelude::*;
@@ -32,8 +34,8 @@
 //! assert!(out.collides && out.probability > 0.5);
 //! ```
 //!
-//! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them, `adb` on top of `bvh`;
-//! `poses` generates benchmark scenarios. None of them imports Bevy: the engine integration is
+//! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them, `adb` and `tracking` on
+//! top of `bvh`; `poses` and `deform` generate benchmark scenarios. None of them imports Bevy: the engine integration is
 //! [`ecs`] alone ([`ecs::StochasticCollisionPlugin`], collision events, budgets, responses).
 #![warn(missing_docs)]
 

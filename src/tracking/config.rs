@@ -8,8 +8,10 @@ pub enum Sampling {
     /// Over area weighted by how far the triangles moved since the last frame
     /// (importance-driven: fast-moving parts make new contacts).
     Velocity,
-    /// Kimmerle et al.: only inside overlapping patch pairs of the incomplete hierarchy
-    /// (plus a quarter of the samples uniform, for contacts between adjacent patches).
+    /// Kimmerle et al.: only inside overlapping patch pairs of the incomplete hierarchy (a
+    /// random descent below a candidate pair down to two leaves whose boxes still meet). For
+    /// self-collision, a quarter of the samples are uniform (contacts between adjacent
+    /// patches) and a quarter are crease probes around the sharpest folded or collapsed edges.
     #[default]
     Hierarchy,
 }
