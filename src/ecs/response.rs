@@ -129,7 +129,7 @@ impl Default for ImpulseSettings {
     }
 }
 
-/// Impulse response for simple rigid bodies (see the [module docs](self)). Add it after
+/// Impulse response for simple rigid bodies (see [`ContactQueue`]). Add it after
 /// [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin), with the same schedule.
 pub struct ImpulseResponsePlugin {
     /// The schedule of the collision plugin.
@@ -318,7 +318,7 @@ impl Default for PenaltySettings {
     }
 }
 
-/// Penalty response for deformable meshes (see the [module docs](self)).
+/// Penalty response for deformable meshes (see [`ContactQueue`]).
 pub struct PenaltyResponsePlugin {
     /// The schedule of the collision plugin.
     pub schedule: Interned<dyn ScheduleLabel>,
