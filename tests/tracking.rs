@@ -430,3 +430,43 @@ fn shared_meshes_with_boundaries_and_non_manifold_edges_track_cleanly() {
         whirl_and_check(&mesh, &[0, 8, 12, 16, 20], 4);
     }
 }
+
+#[test]
+fn close_pairs_of_the_colon_at_rest_lie_within_the_two_excluded_rings() {
+    // Why self-collision excludes two rings by default: the shared open colon, undeformed, has
+    // triangle pairs closer than the default thickness that share no vertex, and all of them
+    // are within two rings of each other: tessellation, not folds.
+    let Some(path) = common::shared_mesh("large-intestine-sf+-hf-.obj") else {
+        return;
+    };
+    let mesh = TriMesh::from_obj(&path).unwrap();
+    let thickness = TrackerConfig::for_surface(&TrackedSurface::new(mesh.clone())).thickness;
+    let cm = CollisionMesh::new(mesh.clone());
+    let mut close = Vec::new();
+    stochastic_collision::bvh::self_contacts(
+        &cm,
+        thickness,
+        &mut QueryWorkspace::new(),
+        &mut close,
+    );
+    let topo = Topology::new(&mesh);
+    let tris = mesh.triangles();
+    let beyond = |rings| {
+        close
+            .iter()
+            .filter(|c| {
+                !triangles_within_rings(
+                    &topo,
+                    tris[c.pair.a as usize],
+                    tris[c.pair.b as usize],
+                    rings,
+                )
+            })
+            .count()
+    };
+    assert!(
+        beyond(0) > 0,
+        "pairs one or two rings apart closer than the thickness"
+    );
+    assert_eq!(beyond(2), 0);
+}

@@ -197,6 +197,33 @@ struct Job {
     pairs: SmallVec<[TrianglePair; 4]>,
 }
 
+/// The job of entries `a` and `b` (the same for a self-colliding mesh): the pair's tracker,
+/// taken out of `state` or made with the pair's fidelity (pairs per frame) and seed. Their
+/// surfaces must be up to date.
+fn job(state: &mut TrackingState, frame: &ColliderFrame, a: u32, b: u32, seed: u64) -> Job {
+    let (ea, eb) = (&frame.entries[a as usize], &frame.entries[b as usize]);
+    let key = (ea.entity, eb.entity);
+    let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
+        let n = match ea.fidelity.combine(eb.fidelity) {
+            Fidelity::Tracking { pairs_per_frame } => pairs_per_frame,
+            _ => 1,
+        };
+        let (sa, sb) = (
+            &state.surfaces[&ea.entity].surface,
+            &state.surfaces[&eb.entity].surface,
+        );
+        Tracker::new(tracker_config(sa, sb, n, seed, ea.entity, eb.entity))
+    });
+    Job {
+        key,
+        a,
+        b,
+        tracker,
+        contacts: SmallVec::new(),
+        pairs: SmallVec::new(),
+    }
+}
+
 /// Runs `jobs` in parallel, each on its own tracker.
 fn run_jobs(
     jobs: &mut [Job],
@@ -212,11 +239,11 @@ fn run_jobs(
         );
         let sa = &state.surfaces[&ea.entity].surface;
         let self_mode = job.a == job.b;
-        let found: Vec<Contact> = if self_mode {
-            job.tracker.step_self(sa).to_vec()
+        let found: &[Contact] = if self_mode {
+            job.tracker.step_self(sa)
         } else {
             let sb = &state.surfaces[&eb.entity].surface;
-            job.tracker.step_pair(sa, &ea.pose, sb, &eb.pose).to_vec()
+            job.tracker.step_pair(sa, &ea.pose, sb, &eb.pose)
         };
         let step = found.len().div_ceil(max_contacts.max(1)).max(1);
         job.contacts = found
@@ -361,26 +388,7 @@ pub fn self_collision(
     update_surfaces(&mut state, &entries, &pool);
     let mut jobs: Vec<Job> = tracked
         .iter()
-        .map(|&i| {
-            let e = &frame.entries[i as usize];
-            let key = (e.entity, e.entity);
-            let n = match e.fidelity {
-                Fidelity::Tracking { pairs_per_frame } => pairs_per_frame,
-                _ => 1,
-            };
-            let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
-                let s = &state.surfaces[&e.entity].surface;
-                Tracker::new(tracker_config(s, s, n, config.seed, e.entity, e.entity))
-            });
-            Job {
-                key,
-                a: i,
-                b: i,
-                tracker,
-                contacts: SmallVec::new(),
-                pairs: SmallVec::new(),
-            }
-        })
+        .map(|&i| job(&mut state, &frame, i, i, config.seed))
         .collect();
     run_jobs(&mut jobs, &frame, &state, &pool, max);
     finish_jobs(
@@ -442,32 +450,7 @@ pub fn track_pairs(
     update_surfaces(&mut state, &entries, &pool);
     let mut jobs: Vec<Job> = tracked
         .iter()
-        .map(|pair| {
-            let (ea, eb) = (
-                &frame.entries[pair.a as usize],
-                &frame.entries[pair.b as usize],
-            );
-            let key = (ea.entity, eb.entity);
-            let n = match ea.fidelity.combine(eb.fidelity) {
-                Fidelity::Tracking { pairs_per_frame } => pairs_per_frame,
-                _ => 1,
-            };
-            let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
-                let (sa, sb) = (
-                    &state.surfaces[&ea.entity].surface,
-                    &state.surfaces[&eb.entity].surface,
-                );
-                Tracker::new(tracker_config(sa, sb, n, config.seed, ea.entity, eb.entity))
-            });
-            Job {
-                key,
-                a: pair.a,
-                b: pair.b,
-                tracker,
-                contacts: SmallVec::new(),
-                pairs: SmallVec::new(),
-            }
-        })
+        .map(|pair| job(&mut state, &frame, pair.a, pair.b, config.seed))
         .collect();
     run_jobs(&mut jobs, &frame, &state, &pool, config.max_self_contacts);
     finish_jobs(
