@@ -12,6 +12,7 @@ use super::components::CollisionLayers;
 use crate::geometry::Aabb;
 
 use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::pool::CollisionTaskPool;
 use super::prepare::ColliderFrame;
 
 /// A candidate pair: indices into the run's [`ColliderFrame`] entries, `a < b` (so the first is
@@ -51,6 +52,7 @@ pub fn sweep_and_prune(
     frame: Res<ColliderFrame>,
     mut state: ResMut<BroadPhaseState>,
     mut out: ResMut<CandidatePairs>,
+    pool: Res<CollisionTaskPool>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
     let start = Instant::now();
@@ -112,30 +114,69 @@ pub fn sweep_and_prune(
         .iter()
         .map(|&i| (entries[i as usize].aabb, entries[i as usize].layers))
         .collect();
-    let pairs = &mut out.pairs;
-    pairs.clear();
-    for (k, (bi, li)) in boxes.iter().enumerate() {
-        let (max, mask) = (bi.max[axis], sweep[k].1);
-        for (m, &(min, mj)) in sweep[k + 1..].iter().enumerate() {
-            if min > max {
-                break;
-            }
-            if mask & mj == 0 {
-                continue;
-            }
-            let (bj, lj) = &boxes[k + 1 + m];
-            if bi.intersects(bj) && li.interacts_with(lj) {
-                let (i, j) = (order[k], order[k + 1 + m]);
-                pairs.push(CandidatePair {
-                    a: i.min(j),
-                    b: i.max(j),
-                });
+    // Sweep in parallel over runs of the sorted order (the later boxes have fewer partners
+    // ahead of them; a few chunks per thread even that out).
+    let starts: Vec<usize> = (0..boxes.len()).collect();
+    let found = pool.map_chunks(&starts, pool.chunk_size(boxes.len(), 64), |ks| {
+        let mut found = Vec::new();
+        for &k in ks {
+            let (bi, li) = &boxes[k];
+            let (max, mask) = (bi.max[axis], sweep[k].1);
+            for (m, &(min, mj)) in sweep[k + 1..].iter().enumerate() {
+                if min > max {
+                    break;
+                }
+                if mask & mj == 0 {
+                    continue;
+                }
+                let (bj, lj) = &boxes[k + 1 + m];
+                if bi.intersects(bj) && li.interacts_with(lj) {
+                    let (i, j) = (order[k], order[k + 1 + m]);
+                    found.push(CandidatePair {
+                        a: i.min(j),
+                        b: i.max(j),
+                    });
+                }
             }
         }
-    }
-    pairs.sort_unstable_by_key(|p| (u64::from(p.a) << 32) | u64::from(p.b));
+        found
+    });
+    sort_pairs(
+        found.iter().flatten().copied(),
+        entries.len(),
+        &mut out.pairs,
+    );
+    let pairs = &out.pairs;
     state.order = order.iter().map(|&i| entries[i as usize].entity).collect();
     diag.record(Stage::BroadPhase, start.elapsed(), pairs.len() as u64);
+}
+
+/// Sorts `found` into `out` by `(a, b)`: a counting sort by `a` (linear), then each run of
+/// equal `a` (a box's few partners) by `b`.
+fn sort_pairs(
+    found: impl Iterator<Item = CandidatePair> + Clone,
+    n: usize,
+    out: &mut Vec<CandidatePair>,
+) {
+    let mut starts = vec![0u32; n + 1];
+    let mut total = 0;
+    for p in found.clone() {
+        starts[p.a as usize + 1] += 1;
+        total += 1;
+    }
+    for i in 1..=n {
+        starts[i] += starts[i - 1];
+    }
+    out.clear();
+    out.resize(total, CandidatePair { a: 0, b: 0 });
+    let mut next = starts.clone();
+    for p in found {
+        out[next[p.a as usize] as usize] = p;
+        next[p.a as usize] += 1;
+    }
+    for w in starts.windows(2) {
+        out[w[0] as usize..w[1] as usize].sort_unstable_by_key(|p| p.b);
+    }
 }
 
 /// Picks the sweep axis: the one along which the box centres spread most, measured by the

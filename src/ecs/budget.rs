@@ -22,20 +22,35 @@ pub fn pair_priority(last_probability: Option<f64>, a: &Aabb, b: &Aabb, motion: 
 /// Node-pair slices: every pair gets `min`, the rest of `total` goes out in proportion to the
 /// priorities, each slice at most `max`.
 pub fn slices(priorities: &[f32], total: u64, min: u64, max: u64) -> Vec<u64> {
-    let n = priorities.len() as u64;
-    let rest = total.saturating_sub(n * min) as f64;
-    let sum: f64 = priorities.iter().map(|&p| f64::from(p)).sum();
-    priorities
-        .iter()
-        .map(|&p| {
-            let share = if sum > 0.0 {
-                rest * f64::from(p) / sum
-            } else {
-                0.0
-            };
-            (min + share as u64).clamp(min, max.max(min))
-        })
-        .collect()
+    let share = SliceShare::new(priorities.iter().copied(), total, min, max);
+    priorities.iter().map(|&p| share.slice(p)).collect()
+}
+
+/// The rule of [`slices`], for slices handed out one at a time.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SliceShare {
+    min: u64,
+    max: u64,
+    /// Node pairs left after every pair's minimum, per unit of priority.
+    per_priority: f64,
+}
+
+impl SliceShare {
+    /// The share of `total` among pairs of the given priorities.
+    pub fn new(priorities: impl Iterator<Item = f32>, total: u64, min: u64, max: u64) -> Self {
+        let (n, sum) = priorities.fold((0u64, 0.0f64), |(n, s), p| (n + 1, s + f64::from(p)));
+        let rest = total.saturating_sub(n * min) as f64;
+        Self {
+            min,
+            max: max.max(min),
+            per_priority: if sum > 0.0 { rest / sum } else { 0.0 },
+        }
+    }
+
+    /// The slice of a pair of priority `p`.
+    pub fn slice(&self, p: f32) -> u64 {
+        (self.min + (self.per_priority * f64::from(p)) as u64).clamp(self.min, self.max)
+    }
 }
 
 /// The seed of a pair's randomness in one run: the same for any thread count or order.

@@ -121,6 +121,9 @@ pub struct CollisionError {
 #[derive(Resource, Debug, Default)]
 pub struct ReportState {
     touching: Vec<(Entity, Entity)>,
+    /// Reused buffers (no fresh memory every run): this run's touching pairs, fresh contacts.
+    now: Vec<(Entity, Entity)>,
+    fresh: Vec<Contact>,
 }
 
 impl ReportState {
@@ -203,7 +206,7 @@ impl ContactQueue {
         consumed
     }
 
-    fn refill(&mut self, fresh: Vec<Contact>, budget: Option<usize>) {
+    fn refill(&mut self, fresh: &mut Vec<Contact>, budget: Option<usize>) {
         self.remaining = budget;
         if !self.enabled {
             return;
@@ -215,19 +218,20 @@ impl ContactQueue {
         self.queue
             .retain(|c| fresh_pairs.binary_search(&(c.a, c.b)).is_err());
         self.superseded_total += (before - self.queue.len()) as u64;
-        self.queue.extend(fresh);
+        self.queue.append(fresh);
+        // Ties (rare) broken lazily: most comparisons end at the priority.
         self.queue.sort_unstable_by(|x, y| {
             y.priority
                 .total_cmp(&x.priority)
-                .then((x.a, x.b).cmp(&(y.a, y.b)))
-                .then(x.frame.cmp(&y.frame))
-                .then(x.triangles.cmp(&y.triangles))
-                .then(
+                .then_with(|| (x.a, x.b).cmp(&(y.a, y.b)))
+                .then_with(|| x.frame.cmp(&y.frame))
+                .then_with(|| x.triangles.cmp(&y.triangles))
+                .then_with(|| {
                     x.point
                         .to_array()
                         .map(f32::to_bits)
-                        .cmp(&y.point.to_array().map(f32::to_bits)),
-                )
+                        .cmp(&y.point.to_array().map(f32::to_bits))
+                })
         });
     }
 }
@@ -253,12 +257,16 @@ pub fn report_collisions(
     if !outcomes.outcomes.is_sorted_by_key(key) {
         outcomes.outcomes.sort_by_key(key);
     }
-    let now: Vec<(Entity, Entity)> = outcomes
-        .outcomes
-        .iter()
-        .filter(|o| o.collides)
-        .map(|o| (o.a, o.b))
-        .collect();
+    let state = &mut *state;
+    let now = &mut state.now;
+    now.clear();
+    now.extend(
+        outcomes
+            .outcomes
+            .iter()
+            .filter(|o| o.collides)
+            .map(|o| (o.a, o.b)),
+    );
     let (mut started, mut ended) = (Vec::new(), Vec::new());
     let (mut i, mut j) = (0, 0);
     let old = &state.touching;
@@ -300,7 +308,8 @@ pub fn report_collisions(
             CollisionStarted { entity, other }
         });
     }
-    let mut fresh = Vec::new();
+    let fresh = &mut state.fresh;
+    fresh.clear();
     for o in outcomes.outcomes.iter().filter(|o| o.collides) {
         for c in &o.contacts {
             fresh.push(Contact {
@@ -322,7 +331,7 @@ pub fn report_collisions(
     counters.ended += ended.len() as u64;
     counters.contacts += fresh.len() as u64;
     queue.refill(fresh, config.response_budget);
-    state.touching = now;
+    std::mem::swap(&mut state.touching, &mut state.now);
     diag.record(
         Stage::Report,
         start.elapsed(),

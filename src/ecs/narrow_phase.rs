@@ -13,7 +13,7 @@ use glam::Vec3;
 use smallvec::SmallVec;
 
 use super::broad_phase::{CandidatePair, CandidatePairs};
-use super::budget::{WorkRate, pair_priority, slices};
+use super::budget::{SliceShare, WorkRate, pair_priority};
 use super::components::Fidelity;
 use super::contact::{ContactPoint, node_contact, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
@@ -24,7 +24,6 @@ use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
 use crate::bvh::{
     QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with, root_boxes_overlap,
 };
-use crate::geometry::Pose;
 
 /// How a pair's answer was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -100,18 +99,26 @@ impl PairOutcome {
 }
 
 /// The pair answers of the current run, sorted by `(a, b)` after the Report stage; also what
-/// the narrow phase remembers (last confidences, the measured work rate).
+/// the narrow phase remembers (last confidences, the measured costs).
 #[derive(Resource, Debug, Default)]
 pub struct PairOutcomes {
     pub(crate) outcomes: Vec<PairOutcome>,
     pub(crate) tracked: Vec<CandidatePair>,
-    /// Last answers' pairs, sorted, and the answers.
+    /// This run's tested pairs, sorted, and their answers (the memory for the next run).
     pub(crate) history_keys: Vec<(Entity, Entity)>,
     pub(crate) history: Vec<PairMemory>,
+    /// The previous run's (read while this run's are written; buffers swap each run).
+    last_keys: Vec<(Entity, Entity)>,
+    last: Vec<PairMemory>,
+    /// Reused buffers: the jobs in pair order; the positions tested and answered without test.
+    jobs: Vec<Job>,
+    tested: Vec<u32>,
+    untested: Vec<u32>,
+    tested_done: Vec<Vec<Answer>>,
+    untested_done: Vec<Vec<Answer>>,
     pub(crate) rate: WorkRate,
+    pub(crate) costs: PairCosts,
     pub(crate) exact_node_pairs: f64,
-    /// Serial time of the last run outside the pair tests (kept free before the deadline).
-    pub(crate) overhead: Duration,
 }
 
 impl PairOutcomes {
@@ -129,16 +136,51 @@ pub(crate) struct PairMemory {
     settled: bool,
     /// Runs since the pair was last tested (answered from memory meanwhile).
     stale: u32,
-    poses: (Pose, Pose),
+    /// The run whose poses the answer was computed at.
+    tested_run: u64,
     contact: Option<ContactPoint>,
 }
 
+/// The narrow phase's measured costs (time mode), as moving averages of wall-clock time on
+/// the pool: what a test costs, what an answer without test costs, and the serial time after
+/// the tests.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairCosts {
+    test_us: f64,
+    untested_us: f64,
+    after: Duration,
+}
+
+impl Default for PairCosts {
+    fn default() -> Self {
+        Self {
+            test_us: 2.0,
+            untested_us: 0.05,
+            after: Duration::ZERO,
+        }
+    }
+}
+
+impl PairCosts {
+    fn learn(value: &mut f64, count: usize, time: Duration) {
+        // A handful of pairs says little about the cost of many (pool start-up dominates).
+        if count >= 32 {
+            *value = 0.8 * *value + 0.2 * time.as_secs_f64() * 1e6 / count as f64;
+        }
+    }
+}
+
+/// A job's position, answer and the memory it leaves.
+type Answer = (u32, PairOutcome, PairMemory);
+
 #[derive(Debug, Clone, Copy)]
 struct Job {
-    /// Position in pair order.
-    pos: u32,
     pair: CandidatePair,
     method: Method,
+    /// Priority bucket (0: highest), for choosing the pairs tested under a time budget.
+    bucket: u8,
+    /// The last answer is settled and still holds (answered from memory, no test needed).
+    cached: bool,
     p_min: f64,
     priority: f32,
     slice: u64,
@@ -167,7 +209,23 @@ pub(crate) fn with_workspaces<R>(
     })
 }
 
+/// Number of priority buckets ([`priority_bucket`]).
+const BUCKETS: usize = 32;
+
+/// The bucket of a priority: 0 for the highest, quarter steps of `log2` (read off the float's
+/// exponent and two leading mantissa bits: monotone, no `log2` call).
+fn priority_bucket(p: f32) -> u8 {
+    // 2^-4 and below share the last bucket, 2^4 and above the first.
+    let lowest = 2f32.powi(-4).to_bits() >> 21;
+    let step = (p.max(0.0).to_bits() >> 21).saturating_sub(lowest);
+    (BUCKETS as u32 - 1).saturating_sub(step) as u8
+}
+
 /// Tests the candidate pairs (all but tracked ones) in parallel.
+///
+/// Under a time budget, the pairs tested are the most urgent ones that fit (by the measured
+/// cost of a test); the others are answered from memory ([`Method::Coherence`]) and wait less
+/// next time. The deadline stays as a safety net for the tests themselves.
 pub fn narrow_phase(
     frame: Res<ColliderFrame>,
     candidates: Res<CandidatePairs>,
@@ -181,95 +239,123 @@ pub fn narrow_phase(
     let entries = &frame.entries;
     state.outcomes.clear();
     state.tracked.clear();
-    // Candidates and the last run's answers are both sorted by entity pair: a merge join.
-    let (old_keys, old_memory) = (
-        std::mem::take(&mut state.history_keys),
-        std::mem::take(&mut state.history),
-    );
-    let mut cursor = 0;
-    let mut jobs = Vec::with_capacity(candidates.pairs.len());
-    for &pair in &candidates.pairs {
-        let (ea, eb) = (&entries[pair.a as usize], &entries[pair.b as usize]);
-        let (method, p_min) = match ea.fidelity.combine(eb.fidelity) {
-            Fidelity::Tracking { .. } => {
-                state.tracked.push(pair);
-                continue;
-            }
-            Fidelity::Bounds => (Method::Bounds, 1.0),
-            Fidelity::Exact => (Method::Exact, 1.0),
-            Fidelity::Adb { p_min } if both_rigid(ea, eb) => (Method::Adb, p_min),
-            Fidelity::Adb { .. } => (Method::Exact, 1.0),
-        };
-        let key = (ea.entity, eb.entity);
-        while cursor < old_keys.len() && old_keys[cursor] < key {
-            cursor += 1;
-        }
-        let last = (old_keys.get(cursor) == Some(&key)).then_some(cursor as u32);
-        let p_last = last.map(|i| old_memory[i as usize].probability);
-        let stale = last.map_or(0, |i| old_memory[i as usize].stale);
-        let mut priority = pair_priority(p_last, &ea.aabb, &eb.aabb, eb.motion - ea.motion);
-        if method == Method::Exact {
-            // Exact pairs were asked for: tested before the others.
-            priority *= 4.0;
-        }
-        // New pairs first (collisions start there); a pair answered from memory waits less
-        // each run, so none starves under overload.
-        if last.is_none() {
-            priority *= 4.0;
-        }
-        priority *= (1 + stale.min(15)) as f32;
-        jobs.push(Job {
-            pos: jobs.len() as u32,
-            pair,
-            method,
-            p_min,
-            priority,
-            slice: u64::MAX,
-            last,
-        });
-    }
-    let (total, deadline) = node_budget(&config, &diag, state, Instant::now());
+    // This run's answers become the next run's memory; the last run's are read meanwhile.
+    std::mem::swap(&mut state.history_keys, &mut state.last_keys);
+    std::mem::swap(&mut state.history, &mut state.last);
+    state.history_keys.clear();
+    state.history.clear();
+    let (old_keys, old_memory) = (&state.last_keys, &state.last);
+    // Jobs in parallel over runs of candidates (the priorities need the last answers: each
+    // run finds its place in them once, then merge-joins).
+    let jobs = &mut state.jobs;
+    jobs.clear();
+    jobs.extend(candidates.pairs.iter().map(|&pair| Job {
+        pair,
+        method: Method::Tracking,
+        bucket: 0,
+        cached: false,
+        p_min: 1.0,
+        priority: 0.0,
+        slice: u64::MAX,
+        last: None,
+    }));
+    let chunk = pool.chunk_size(jobs.len(), 256);
+    pool.for_each_chunk_mut(jobs, chunk, |c| plan_jobs(c, entries, old_keys, old_memory));
+    // Tracked pairs go to the Tracking stage; the others keep their order.
     let mut adb_pairs = 0u64;
-    if let Some(total) = total {
-        let adb: Vec<usize> = (0..jobs.len())
-            .filter(|&i| jobs[i].method == Method::Adb)
-            .collect();
-        let pr: Vec<f32> = adb.iter().map(|&i| jobs[i].priority).collect();
-        for (&i, s) in adb
-            .iter()
-            .zip(slices(&pr, total, config.min_slice, config.max_slice))
-        {
-            jobs[i].slice = s;
+    jobs.retain(|j| {
+        if j.method == Method::Tracking {
+            state.tracked.push(j.pair);
         }
-        adb_pairs = adb.len() as u64;
-    } else {
-        adb_pairs += jobs.iter().filter(|j| j.method == Method::Adb).count() as u64;
-    }
-    // Highest priority first when a deadline may cut the run (buckets of priority, pair order
-    // within a bucket: linear and deterministic).
-    let order = if deadline.is_some() {
-        by_priority(&jobs)
-    } else {
-        jobs.clone()
+        adb_pairs += u64::from(j.method == Method::Adb);
+        j.method != Method::Tracking
+    });
+    // Which pairs are tested: all of them, or under a time budget the most urgent that fit.
+    let testable = |j: &Job| !j.cached && j.method != Method::Bounds;
+    let (test_count, deadline) = match config.budget {
+        FrameBudget::Time(budget) => {
+            let n = jobs.iter().filter(|j| testable(j)).count();
+            let (count, deadline) =
+                tests_that_fit(budget, n, jobs.len(), &diag, &state.costs, Instant::now());
+            (Some(count), Some(deadline))
+        }
+        _ => (None, None),
     };
+    let cut = test_count.map(|count| priority_cut(jobs, count, testable));
+    let (tested, untested) = (&mut state.tested, &mut state.untested);
+    tested.clear();
+    untested.clear();
+    let mut taken_at_cut = 0;
+    for (pos, j) in jobs.iter().enumerate() {
+        let test = testable(j)
+            && match cut {
+                None => true,
+                Some((bucket, _)) if j.bucket < bucket => true,
+                Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
+                    taken_at_cut += 1;
+                    true
+                }
+                Some(_) => false,
+            };
+        if test { &mut *tested } else { &mut *untested }.push(pos as u32);
+    }
+    // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
+    let is_adb = |&&i: &&u32| jobs[i as usize].method == Method::Adb;
+    let total = node_budget(&config, deadline, start, state.rate, state.exact_node_pairs);
+    if let Some(total) = total {
+        let share = SliceShare::new(
+            tested
+                .iter()
+                .filter(is_adb)
+                .map(|&i| jobs[i as usize].priority),
+            total,
+            config.min_slice,
+            config.max_slice,
+        );
+        for &i in tested.iter() {
+            let j = &mut jobs[i as usize];
+            if j.method == Method::Adb {
+                j.slice = share.slice(j.priority);
+            }
+        }
+    }
     let ctx = Context {
         entries,
-        memory: &old_memory,
+        jobs,
+        memory: old_memory,
         config: &config,
-        deadline,
+        run: diag.frame,
     };
-    let chunk = pool.chunk_size(order.len(), 8);
+    // The tests (in pair order; the deadline is a safety net), then the answers from memory.
     let run_start = Instant::now();
-    let results = pool.map_chunks(&order, chunk, |c| ctx.run_chunk(c));
-    let run_time = run_start.elapsed();
-    // Back in pair order (by entity), whatever the processing order and thread count.
-    let mut slots: Vec<Option<(PairOutcome, PairMemory)>> = vec![None; jobs.len()];
-    for (pos, outcome, memory) in results.into_iter().flatten() {
-        slots[pos as usize] = Some((outcome, memory));
-    }
+    let chunk = pool.chunk_size(tested.len(), 8);
+    let (tested_done, untested_done) = (&mut state.tested_done, &mut state.untested_done);
+    pool.map_chunks_into(tested, chunk, tested_done, |c, out| {
+        ctx.run_chunk(c, deadline, out);
+    });
+    let test_time = run_start.elapsed();
+    let chunk = pool.chunk_size(untested.len(), 256);
+    pool.map_chunks_into(untested, chunk, untested_done, |c, out| {
+        ctx.run_chunk(c, Some(run_start), out);
+    });
+    let untested_time = run_start.elapsed() - test_time;
+    let after_start = Instant::now();
+    // Merged back in pair order (by entity), whatever the thread count.
+    let mut tested_iter = tested_done.iter_mut().flat_map(|v| v.drain(..)).peekable();
+    let mut untested_iter = untested_done
+        .iter_mut()
+        .flat_map(|v| v.drain(..))
+        .peekable();
     let c = &mut diag.counters;
     let (mut np, mut exact_np) = (0, 0);
-    for (o, m) in slots.into_iter().flatten() {
+    loop {
+        let next = match (tested_iter.peek(), untested_iter.peek()) {
+            (Some(t), Some(u)) if t.0 < u.0 => tested_iter.next(),
+            (Some(_), Some(_)) | (None, Some(_)) => untested_iter.next(),
+            (Some(_), None) => tested_iter.next(),
+            (None, None) => break,
+        };
+        let Some((_, o, m)) = next else { break };
         np += o.node_pairs;
         if o.method == Method::Exact {
             exact_np += o.node_pairs;
@@ -287,68 +373,151 @@ pub fn narrow_phase(
     let elapsed = start.elapsed();
     state
         .rate
-        .update(np, state.outcomes.len(), elapsed.as_secs_f64() * 1e6);
+        .update(np, state.tested.len(), test_time.as_secs_f64() * 1e6);
     state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * exact_np as f64;
-    state.overhead = elapsed.saturating_sub(run_time);
+    let costs = &mut state.costs;
+    PairCosts::learn(&mut costs.test_us, state.tested.len(), test_time);
+    PairCosts::learn(&mut costs.untested_us, state.untested.len(), untested_time);
+    costs.after = after_start.elapsed();
     diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
 }
 
-/// The jobs, highest priority first: 32 buckets of `log2(priority)`, each in pair order.
-fn by_priority(jobs: &[Job]) -> Vec<Job> {
-    let bucket = |p: f32| 31 - ((p.max(1e-6).log2() * 4.0 + 16.0).clamp(0.0, 31.0) as usize);
-    let mut counts = [0usize; 33];
-    for j in jobs {
-        counts[bucket(j.priority) + 1] += 1;
+/// Fills in each job of a run of candidates (in pair order): its method (`Tracking`: handed
+/// over to the Tracking stage), last answer, whether that answer still holds, and priority.
+fn plan_jobs(
+    jobs: &mut [Job],
+    entries: &[ColliderEntry],
+    old_keys: &[(Entity, Entity)],
+    old_memory: &[PairMemory],
+) {
+    let Some(first) = jobs.first() else {
+        return;
+    };
+    let key_of = |j: &Job| {
+        (
+            entries[j.pair.a as usize].entity,
+            entries[j.pair.b as usize].entity,
+        )
+    };
+    let mut cursor = old_keys.partition_point(|k| *k < key_of(first));
+    for job in jobs {
+        let (ea, eb) = (&entries[job.pair.a as usize], &entries[job.pair.b as usize]);
+        (job.method, job.p_min) = match ea.fidelity.combine(eb.fidelity) {
+            Fidelity::Tracking { .. } => continue,
+            Fidelity::Bounds => (Method::Bounds, 1.0),
+            Fidelity::Exact => (Method::Exact, 1.0),
+            Fidelity::Adb { p_min } if both_rigid(ea, eb) => (Method::Adb, p_min),
+            Fidelity::Adb { .. } => (Method::Exact, 1.0),
+        };
+        let key = (ea.entity, eb.entity);
+        while cursor < old_keys.len() && old_keys[cursor] < key {
+            cursor += 1;
+        }
+        job.last = (old_keys.get(cursor) == Some(&key)).then_some(cursor as u32);
+        let memory = job.last.map(|i| &old_memory[i as usize]);
+        // Settled, and neither pose nor geometry changed since: the answer still holds.
+        job.cached =
+            memory.is_some_and(|m| m.settled && m.tested_run >= ea.still_since.max(eb.still_since));
+        let mut priority = pair_priority(
+            memory.map(|m| m.probability),
+            &ea.aabb,
+            &eb.aabb,
+            eb.motion - ea.motion,
+        );
+        if job.method == Method::Exact {
+            // Exact pairs were asked for: tested before the others.
+            priority *= 4.0;
+        }
+        // New pairs first (collisions start there); a pair answered from memory waits less
+        // each run, so none starves under overload.
+        match memory {
+            None => priority *= 4.0,
+            Some(m) => priority *= (1 + m.stale.min(15)) as f32,
+        }
+        job.priority = priority;
+        job.bucket = priority_bucket(priority);
     }
-    for i in 1..33 {
-        counts[i] += counts[i - 1];
-    }
-    let mut out = jobs.to_vec();
-    for j in jobs {
-        let b = bucket(j.priority);
-        out[counts[b]] = *j;
-        counts[b] += 1;
-    }
-    out
 }
 
-/// The ADB node pairs of this run (`None`: unlimited) and, in time mode, the deadline after
-/// which ADB pairs are answered by temporal coherence ([`Method::Coherence`]).
+/// How many pairs can be tested in what is left of the time budget, by the measured costs,
+/// and the deadline of the tests. `testable` of the `all` pairs need a test; the others (and
+/// the untested) are answered from memory after the tests.
+fn tests_that_fit(
+    budget: Duration,
+    testable: usize,
+    all: usize,
+    diag: &CollisionDiagnostics,
+    costs: &PairCosts,
+    now: Instant,
+) -> (usize, Instant) {
+    let spent = now.saturating_duration_since(diag.frame_start);
+    let reserve = diag.reserve_after_narrow() + costs.after;
+    // At least a quarter of the budget goes to tests, whatever the overhead: without tests
+    // nothing ever settles (and pairs that stopped moving cannot be cached).
+    let left = budget
+        .saturating_sub(spent)
+        .saturating_sub(reserve)
+        .max(budget / 4);
+    let left_us = left.as_secs_f64() * 1e6;
+    // n tests and (all − n) answers from memory fit: n·test + (all − n)·untested ≤ left.
+    let per_test = (costs.test_us - costs.untested_us).max(1e-3);
+    let room = (left_us - all as f64 * costs.untested_us).max(left_us / 4.0);
+    let count = ((room / per_test) as usize).min(testable);
+    let untested_us = (all - count) as f64 * costs.untested_us;
+    let deadline = now + Duration::from_secs_f64((left_us - untested_us).max(left_us / 4.0) * 1e-6);
+    (count, deadline)
+}
+
+/// The priority bucket at which `count` testable jobs are reached (from the most urgent), and
+/// how many of that bucket fit.
+fn priority_cut(jobs: &[Job], count: usize, testable: impl Fn(&Job) -> bool) -> (u8, usize) {
+    let mut per_bucket = [0usize; BUCKETS];
+    for j in jobs.iter().filter(|j| testable(j)) {
+        per_bucket[usize::from(j.bucket)] += 1;
+    }
+    let mut before = 0;
+    for (b, &n) in per_bucket.iter().enumerate() {
+        if before + n >= count {
+            return (b as u8, count - before);
+        }
+        before += n;
+    }
+    (BUCKETS as u8, 0)
+}
+
+/// The ADB node pairs of this run (`None`: unlimited): the configured number, or in time mode
+/// what the measured rate gets done before the deadline.
 fn node_budget(
     config: &CollisionConfig,
-    diag: &CollisionDiagnostics,
-    state: &PairOutcomes,
+    deadline: Option<Instant>,
     now: Instant,
-) -> (Option<u64>, Option<Instant>) {
+    rate: WorkRate,
+    exact_node_pairs: f64,
+) -> Option<u64> {
     match config.budget {
-        FrameBudget::Unlimited => (None, None),
-        FrameBudget::NodePairs(n) => (Some(n), None),
-        FrameBudget::Time(budget) => {
-            let spent = now.saturating_duration_since(diag.frame_start);
-            // The serial overhead is about half before the tests (spent by now), half after.
-            let reserve = diag.reserve_after_narrow() + state.overhead / 2;
-            // At least a quarter of the budget goes to tests, whatever the overhead: without
-            // tests nothing ever settles (and pairs that stopped moving cannot be cached).
-            let left = budget
-                .saturating_sub(spent)
-                .saturating_sub(reserve)
-                .max(budget / 4);
-            let work = left.as_secs_f64() * 1e6 * state.rate.node_pairs_per_us;
-            let adb_work = (work - state.exact_node_pairs).max(0.0);
-            (Some(adb_work as u64), Some(now + left))
+        FrameBudget::Unlimited => None,
+        FrameBudget::NodePairs(n) => Some(n),
+        FrameBudget::Time(_) => {
+            let left = deadline.map_or(Duration::ZERO, |d| d.saturating_duration_since(now));
+            let work = left.as_secs_f64() * 1e6 * rate.node_pairs_per_us;
+            Some((work - exact_node_pairs).max(0.0) as u64)
         }
     }
 }
 
 struct Context<'a> {
     entries: &'a [ColliderEntry],
+    jobs: &'a [Job],
     memory: &'a [PairMemory],
     config: &'a CollisionConfig,
-    deadline: Option<Instant>,
+    /// This run's number.
+    run: u64,
 }
 
 impl Context<'_> {
-    fn run_chunk(&self, jobs: &[Job]) -> Vec<(u32, PairOutcome, PairMemory)> {
+    /// Runs the jobs at `positions`; past `deadline` (read every 8 pairs) pairs are answered
+    /// from memory.
+    fn run_chunk(&self, positions: &[u32], deadline: Option<Instant>, out: &mut Vec<Answer>) {
         let mut query = AdbQuery {
             k_min: self.config.k_min,
             exact_leaves: self.config.adb_exact_leaves,
@@ -356,41 +525,38 @@ impl Context<'_> {
         };
         let mut late = false;
         with_workspaces(|exact, adb, pairs| {
-            jobs.iter()
-                .enumerate()
-                .map(|(k, job)| {
-                    // The clock is read every 8 pairs.
-                    if k % 8 == 0 && !late {
-                        late = self.deadline.is_some_and(|d| Instant::now() > d);
-                    }
-                    let o = self.run_job(job, late, &mut query, exact, adb, pairs);
-                    let (ea, eb) = (
-                        &self.entries[job.pair.a as usize],
-                        &self.entries[job.pair.b as usize],
-                    );
-                    // An answer from memory keeps the memory (with the poses it was computed
-                    // at, so a pair that stops moving can be cached); a test makes a new one.
-                    let memory = match (o.method, job.last) {
-                        (Method::Coherence, Some(i)) => PairMemory {
-                            stale: self.memory[i as usize].stale + 1,
-                            ..self.memory[i as usize]
-                        },
-                        (Method::Cached, Some(i)) => self.memory[i as usize],
-                        _ => PairMemory {
-                            probability: o.probability,
-                            collides: o.collides,
-                            settled: !o.budget_exhausted
-                                && o.method != Method::Coherence
-                                && both_rigid(ea, eb),
-                            stale: 0,
-                            poses: (ea.pose, eb.pose),
-                            contact: o.contacts.first().copied(),
-                        },
-                    };
-                    (job.pos, o, memory)
-                })
-                .collect()
-        })
+            out.extend(positions.iter().enumerate().map(|(k, &pos)| {
+                if k % 8 == 0 && !late {
+                    late = deadline.is_some_and(|d| Instant::now() > d);
+                }
+                let job = &self.jobs[pos as usize];
+                let o = self.run_job(job, late, &mut query, exact, adb, pairs);
+                let (ea, eb) = (
+                    &self.entries[job.pair.a as usize],
+                    &self.entries[job.pair.b as usize],
+                );
+                // An answer from memory keeps the memory (with the run it was computed
+                // in, so a pair that stops moving can be cached); a test makes a new one.
+                let memory = match (o.method, job.last) {
+                    (Method::Coherence, Some(i)) => PairMemory {
+                        stale: self.memory[i as usize].stale + 1,
+                        ..self.memory[i as usize]
+                    },
+                    (Method::Cached, Some(i)) => self.memory[i as usize],
+                    _ => PairMemory {
+                        probability: o.probability,
+                        collides: o.collides,
+                        settled: !o.budget_exhausted
+                            && o.method != Method::Coherence
+                            && both_rigid(ea, eb),
+                        stale: 0,
+                        tested_run: self.run,
+                        contact: o.contacts.first().copied(),
+                    },
+                };
+                (pos, o, memory)
+            }));
+        });
     }
 
     fn run_job(
@@ -419,7 +585,7 @@ impl Context<'_> {
         };
         let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
         let last = job.last.map(|i| self.memory[i as usize]);
-        if let Some(m) = last.filter(|m| m.settled && m.poses == (ea.pose, eb.pose)) {
+        if let Some(m) = last.filter(|_| job.cached) {
             out.method = Method::Cached;
             out.collides = m.collides;
             out.probability = m.probability;

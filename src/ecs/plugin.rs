@@ -18,8 +18,8 @@ use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderFrame, PrepareState, gather_colliders, refit_deformables};
 use super::schedule::CollisionSystems;
 use super::tracking_systems::{
-    FeaturePairs, TrackingState, forget_untracked, needs_self_pass, needs_tracking,
-    prune_feature_pairs, self_collision, track_pairs,
+    FeaturePairs, TrackingState, forget_untracked, holds_tracking_state, needs_self_pass,
+    needs_tracking, prune_feature_pairs, self_collision, track_pairs,
 };
 
 /// How much work the collision stages (Prepare to Report) may do per run.
@@ -201,7 +201,7 @@ impl Plugin for StochasticCollisionPlugin {
                         self_collision.run_if(needs_self_pass),
                         prune_feature_pairs.run_if(any_with_component::<FeaturePairs>),
                         track_pairs.run_if(needs_tracking),
-                        forget_untracked,
+                        forget_untracked.run_if(holds_tracking_state),
                     )
                         .chain()
                         .in_set(Tracking),

@@ -76,6 +76,25 @@ impl CollisionTaskPool {
         }
     }
 
+    /// Like [`map_chunks`](Self::map_chunks), but each chunk's results go into one of `outs`
+    /// (resized to the number of chunks, each cleared): buffers kept from run to run, so a
+    /// stage that runs every frame does not allocate (and fault in) fresh memory each time.
+    pub(crate) fn map_chunks_into<T: Sync, R: Send>(
+        &self,
+        items: &[T],
+        chunk: usize,
+        outs: &mut Vec<Vec<R>>,
+        f: impl Fn(&[T], &mut Vec<R>) + Sync,
+    ) {
+        let chunk = chunk.max(1);
+        outs.resize_with(items.len().div_ceil(chunk), Vec::new);
+        let mut work: Vec<(&[T], &mut Vec<R>)> = items.chunks(chunk).zip(outs.iter_mut()).collect();
+        self.for_each_mut(&mut work, 1, |(c, out)| {
+            out.clear();
+            f(c, out);
+        });
+    }
+
     /// Runs `f` on every item of `items` (mutably) in parallel chunks.
     pub(crate) fn for_each_mut<T: Send>(
         &self,
@@ -83,9 +102,20 @@ impl CollisionTaskPool {
         chunk: usize,
         f: impl Fn(&mut T) + Sync,
     ) {
+        self.for_each_chunk_mut(items, chunk, |c| c.iter_mut().for_each(&f));
+    }
+
+    /// Runs `f` on `chunk`-sized pieces of `items` (mutably) in parallel; pieces start in
+    /// order, so the first items are taken up first.
+    pub(crate) fn for_each_chunk_mut<T: Send>(
+        &self,
+        items: &mut [T],
+        chunk: usize,
+        f: impl Fn(&mut [T]) + Sync,
+    ) {
         let chunk = chunk.max(1);
         if self.inline || items.len() <= chunk {
-            items.iter_mut().for_each(f);
+            items.chunks_mut(chunk).for_each(f);
             return;
         }
         let f = &f;
@@ -93,14 +123,14 @@ impl CollisionTaskPool {
             Some(pool) => {
                 pool.scope(|s| {
                     for c in items.chunks_mut(chunk) {
-                        s.spawn(async move { c.iter_mut().for_each(f) });
+                        s.spawn(async move { f(c) });
                     }
                 });
             }
             None => {
                 compute_pool().scope(|s| {
                     for c in items.chunks_mut(chunk) {
-                        s.spawn(async move { c.iter_mut().for_each(f) });
+                        s.spawn(async move { f(c) });
                     }
                 });
             }

@@ -66,6 +66,9 @@ pub struct ColliderEntry {
     pub self_collision: bool,
     /// Translation since the last run (an estimate of speed × time step).
     pub motion: Vec3,
+    /// The run ([`CollisionDiagnostics::frame`]) since which the entity's pose and geometry
+    /// are unchanged: an answer computed in that run or later still holds for a rigid pair.
+    pub still_since: u64,
 }
 
 /// The colliders of the current run, sorted by entity (read-only for users: what the stages
@@ -92,7 +95,15 @@ impl ColliderFrame {
 #[derive(Resource, Debug, Default)]
 pub struct PrepareState {
     invalid: EntityHashSet,
-    last_translation: EntityHashMap<Vec3>,
+    last_seen: EntityHashMap<LastSeen>,
+}
+
+/// An entity's pose and geometry in the last run it was valid, and since when they hold.
+#[derive(Debug, Clone, Copy)]
+struct LastSeen {
+    pose: Pose,
+    geometry: usize,
+    since: u64,
 }
 
 /// Run condition: some deformable mesh has new positions.
@@ -197,10 +208,29 @@ pub fn gather_colliders(
         let pose = normalized(&pose.0);
         let aabb =
             world_aabb(&geometry.mesh().bvh().root_aabb(), &pose).inflated(config.aabb_margin);
-        let last = state
-            .last_translation
-            .insert(entity, pose.translation)
-            .unwrap_or(pose.translation);
+        // The geometry's identity: a swapped collider is a change (a deformable mesh is
+        // refitted in place, but deformable pairs are never answered from memory).
+        let geometry_id = match &geometry {
+            Geometry::Rigid(t) => Arc::as_ptr(t) as usize,
+            Geometry::Deformable(m) => Arc::as_ptr(m) as usize,
+        };
+        let seen = LastSeen {
+            pose,
+            geometry: geometry_id,
+            since: diag.frame,
+        };
+        let (motion, since) = match state.last_seen.get_mut(&entity) {
+            Some(l) if l.pose == pose && l.geometry == geometry_id => (Vec3::ZERO, l.since),
+            Some(l) => {
+                let motion = pose.translation - l.pose.translation;
+                *l = seen;
+                (motion, diag.frame)
+            }
+            None => {
+                state.last_seen.insert(entity, seen);
+                (Vec3::ZERO, diag.frame)
+            }
+        };
         frame.entries.push(ColliderEntry {
             entity,
             self_collision: self_marker && deformable.is_some(),
@@ -209,13 +239,14 @@ pub fn gather_colliders(
             aabb,
             fidelity: fidelity.copied().unwrap_or(default_fidelity),
             layers: layers.copied().unwrap_or_default(),
-            motion: pose.translation - last,
+            motion,
+            still_since: since,
         });
     }
     state.invalid = now_invalid;
-    if state.last_translation.len() > 2 * frame.entries.len() + 64 {
+    if state.last_seen.len() > 2 * frame.entries.len() + 64 {
         let alive: EntityHashSet = frame.entries.iter().map(|e| e.entity).collect();
-        state.last_translation.retain(|e, _| alive.contains(e));
+        state.last_seen.retain(|e, _| alive.contains(e));
     }
     frame.entries.sort_unstable_by_key(|e| e.entity);
     for (i, e) in frame.entries.iter().enumerate() {

@@ -464,6 +464,12 @@ pub fn track_pairs(
     diag.record(Stage::Tracking, start.elapsed(), tracked.len() as u64);
 }
 
+/// Run condition: something is being tracked (or was until now), so [`forget_untracked`]
+/// has something to drop.
+pub fn holds_tracking_state(state: Res<TrackingState>) -> bool {
+    !(state.trackers.is_empty() && state.surfaces.is_empty() && state.shared.is_empty())
+}
+
 /// Drops trackers and surfaces of entities that are no longer tracked (despawned, or moved to
 /// another fidelity), after the Tracking stage: memory stays bounded however long the app runs.
 pub fn forget_untracked(
