@@ -37,7 +37,7 @@ use bevy_ecs::prelude::*;
 use glam::Vec3;
 
 use super::components::{CollidingEntities, CollisionEventsEnabled};
-use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::diagnostics::{CollisionDiagnostics, Stage, end_frame};
 use super::narrow_phase::{PairOutcome, PairOutcomes};
 use super::plugin::CollisionConfig;
 use crate::bvh::TrianglePair;
@@ -219,20 +219,16 @@ impl ContactQueue {
             .retain(|c| fresh_pairs.binary_search(&(c.a, c.b)).is_err());
         self.superseded_total += (before - self.queue.len()) as u64;
         self.queue.append(fresh);
-        // Ties (rare) broken lazily: most comparisons end at the priority.
-        self.queue.sort_unstable_by(|x, y| {
-            y.priority
-                .total_cmp(&x.priority)
-                .then_with(|| (x.a, x.b).cmp(&(y.a, y.b)))
-                .then_with(|| x.frame.cmp(&y.frame))
-                .then_with(|| x.triangles.cmp(&y.triangles))
-                .then_with(|| {
-                    x.point
-                        .to_array()
-                        .map(f32::to_bits)
-                        .cmp(&y.point.to_array().map(f32::to_bits))
-                })
-        });
+        // Sorted by small keys, then moved once (contacts are large). Stable: ties keep their
+        // order (waiting contacts first, then the fresh ones in pair order), the same for any
+        // thread count.
+        let mut keys: Vec<(f32, u32)> = (self.queue.iter().enumerate())
+            .map(|(i, c)| (c.priority, i as u32))
+            .collect();
+        keys.sort_by(|x, y| y.0.total_cmp(&x.0));
+        fresh.extend(keys.iter().map(|&(_, i)| self.queue[i as usize]));
+        std::mem::swap(&mut self.queue, fresh);
+        fresh.clear();
     }
 }
 
@@ -337,6 +333,7 @@ pub fn report_collisions(
         start.elapsed(),
         (started.len() + ended.len()) as u64,
     );
+    end_frame(&mut diag, &config);
 }
 
 /// Updates both entities' [`CollidingEntities`] (not for a self-collision).

@@ -110,12 +110,10 @@ pub struct PairOutcomes {
     /// The previous run's (read while this run's are written; buffers swap each run).
     last_keys: Vec<(Entity, Entity)>,
     last: Vec<PairMemory>,
-    /// Reused buffers: the jobs in pair order; the positions tested and answered without test.
+    /// Reused buffers: the jobs in pair order, the positions tested, their answers.
     jobs: Vec<Job>,
     tested: Vec<u32>,
-    untested: Vec<u32>,
     tested_done: Vec<Vec<Answer>>,
-    untested_done: Vec<Vec<Answer>>,
     pub(crate) rate: WorkRate,
     pub(crate) costs: PairCosts,
     pub(crate) exact_node_pairs: f64,
@@ -141,13 +139,13 @@ pub(crate) struct PairMemory {
     contact: Option<ContactPoint>,
 }
 
-/// The narrow phase's measured costs (time mode), as moving averages of wall-clock time on
-/// the pool: what a test costs, what an answer without test costs, and the serial time after
-/// the tests.
+/// The narrow phase's measured costs (time mode), as moving averages of wall-clock time:
+/// a test (on the pool), the serial merge per pair (answers from memory included), and the
+/// serial time after the merge.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PairCosts {
     test_us: f64,
-    untested_us: f64,
+    merge_us: f64,
     after: Duration,
 }
 
@@ -155,7 +153,7 @@ impl Default for PairCosts {
     fn default() -> Self {
         Self {
             test_us: 2.0,
-            untested_us: 0.05,
+            merge_us: 0.05,
             after: Duration::ZERO,
         }
     }
@@ -282,9 +280,8 @@ pub fn narrow_phase(
         _ => (None, None),
     };
     let cut = test_count.map(|count| priority_cut(jobs, count, testable));
-    let (tested, untested) = (&mut state.tested, &mut state.untested);
+    let tested = &mut state.tested;
     tested.clear();
-    untested.clear();
     let mut taken_at_cut = 0;
     for (pos, j) in jobs.iter().enumerate() {
         let test = testable(j)
@@ -297,7 +294,9 @@ pub fn narrow_phase(
                 }
                 Some(_) => false,
             };
-        if test { &mut *tested } else { &mut *untested }.push(pos as u32);
+        if test {
+            tested.push(pos as u32);
+        }
     }
     // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
     let is_adb = |&&i: &&u32| jobs[i as usize].method == Method::Adb;
@@ -326,59 +325,54 @@ pub fn narrow_phase(
         config: &config,
         run: diag.frame,
     };
-    // The tests (in pair order; the deadline is a safety net), then the answers from memory.
+    // The tests in parallel (in pair order; the deadline is a safety net).
     let run_start = Instant::now();
     let chunk = pool.chunk_size(tested.len(), 8);
-    let (tested_done, untested_done) = (&mut state.tested_done, &mut state.untested_done);
+    let tested_done = &mut state.tested_done;
     pool.map_chunks_into(tested, chunk, tested_done, |c, out| {
         ctx.run_chunk(c, deadline, out);
     });
     let test_time = run_start.elapsed();
-    let chunk = pool.chunk_size(untested.len(), 256);
-    pool.map_chunks_into(untested, chunk, untested_done, |c, out| {
-        ctx.run_chunk(c, Some(run_start), out);
-    });
-    let untested_time = run_start.elapsed() - test_time;
-    let after_start = Instant::now();
-    // Merged back in pair order (by entity), whatever the thread count.
-    let mut tested_iter = tested_done.iter_mut().flat_map(|v| v.drain(..)).peekable();
-    let mut untested_iter = untested_done
-        .iter_mut()
-        .flat_map(|v| v.drain(..))
-        .peekable();
+    // In pair order (by entity), whatever the thread count: the test answers, and the others
+    // answered from memory on the way.
+    let merge_start = Instant::now();
+    let mut tested_iter = tested_done.iter_mut().flat_map(|v| v.drain(..));
+    let mut next_tested = tested_iter.next();
     let c = &mut diag.counters;
     let (mut np, mut exact_np) = (0, 0);
-    loop {
-        let next = match (tested_iter.peek(), untested_iter.peek()) {
-            (Some(t), Some(u)) if t.0 < u.0 => tested_iter.next(),
-            (Some(_), Some(_)) | (None, Some(_)) => untested_iter.next(),
-            (Some(_), None) => tested_iter.next(),
-            (None, None) => break,
-        };
-        let Some((_, o, m)) = next else { break };
-        np += o.node_pairs;
-        if o.method == Method::Exact {
-            exact_np += o.node_pairs;
-            c.exact_pairs += 1;
+    with_workspaces(|exact, adb, pairs| {
+        let mut query = ctx.query();
+        for pos in 0..jobs.len() as u32 {
+            let (_, o, m) = if next_tested.as_ref().is_some_and(|t| t.0 == pos) {
+                std::mem::replace(&mut next_tested, tested_iter.next()).expect("checked")
+            } else {
+                ctx.answer(pos, true, &mut query, exact, adb, pairs)
+            };
+            np += o.node_pairs;
+            if o.method == Method::Exact {
+                exact_np += o.node_pairs;
+                c.exact_pairs += 1;
+            }
+            c.budget_exhausted_pairs += u64::from(o.budget_exhausted);
+            c.coherence_pairs += u64::from(o.method == Method::Coherence);
+            c.cached_pairs += u64::from(o.method == Method::Cached);
+            state.history_keys.push((o.a, o.b));
+            state.history.push(m);
+            state.outcomes.push(o);
         }
-        c.budget_exhausted_pairs += u64::from(o.budget_exhausted);
-        c.coherence_pairs += u64::from(o.method == Method::Coherence);
-        c.cached_pairs += u64::from(o.method == Method::Cached);
-        state.history_keys.push((o.a, o.b));
-        state.history.push(m);
-        state.outcomes.push(o);
-    }
+    });
+    let merge_time = merge_start.elapsed();
     c.node_pairs += np;
     c.adb_pairs += adb_pairs;
-    let elapsed = start.elapsed();
     state
         .rate
         .update(np, state.tested.len(), test_time.as_secs_f64() * 1e6);
     state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * exact_np as f64;
     let costs = &mut state.costs;
     PairCosts::learn(&mut costs.test_us, state.tested.len(), test_time);
-    PairCosts::learn(&mut costs.untested_us, state.untested.len(), untested_time);
-    costs.after = after_start.elapsed();
+    PairCosts::learn(&mut costs.merge_us, jobs.len(), merge_time);
+    costs.after = merge_start.elapsed().saturating_sub(merge_time);
+    let elapsed = start.elapsed();
     diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
 }
 
@@ -440,8 +434,8 @@ fn plan_jobs(
 }
 
 /// How many pairs can be tested in what is left of the time budget, by the measured costs,
-/// and the deadline of the tests. `testable` of the `all` pairs need a test; the others (and
-/// the untested) are answered from memory after the tests.
+/// and the deadline of the tests. `testable` of the `all` pairs need a test; all of them then
+/// go through the merge (the untested ones answered from memory there).
 fn tests_that_fit(
     budget: Duration,
     testable: usize,
@@ -452,20 +446,16 @@ fn tests_that_fit(
 ) -> (usize, Instant) {
     let spent = now.saturating_duration_since(diag.frame_start);
     let reserve = diag.reserve_after_narrow() + costs.after;
-    // At least a quarter of the budget goes to tests, whatever the overhead: without tests
-    // nothing ever settles (and pairs that stopped moving cannot be cached).
-    let left = budget
+    let left_us = budget
         .saturating_sub(spent)
         .saturating_sub(reserve)
-        .max(budget / 4);
-    let left_us = left.as_secs_f64() * 1e6;
-    // n tests and (all − n) answers from memory fit: n·test + (all − n)·untested ≤ left.
-    let per_test = (costs.test_us - costs.untested_us).max(1e-3);
-    let room = (left_us - all as f64 * costs.untested_us).max(left_us / 4.0);
-    let count = ((room / per_test) as usize).min(testable);
-    let untested_us = (all - count) as f64 * costs.untested_us;
-    let deadline = now + Duration::from_secs_f64((left_us - untested_us).max(left_us / 4.0) * 1e-6);
-    (count, deadline)
+        .as_secs_f64()
+        * 1e6;
+    // At least an eighth of the budget goes to tests, whatever the overhead: without tests
+    // nothing ever settles (and pairs that stopped moving cannot be cached).
+    let tests_us = (left_us - all as f64 * costs.merge_us).max(budget.as_secs_f64() * 0.125e6);
+    let count = ((tests_us / costs.test_us.max(1e-3)) as usize).min(testable);
+    (count, now + Duration::from_secs_f64(tests_us * 1e-6))
 }
 
 /// The priority bucket at which `count` testable jobs are reached (from the most urgent), and
@@ -515,48 +505,64 @@ struct Context<'a> {
 }
 
 impl Context<'_> {
-    /// Runs the jobs at `positions`; past `deadline` (read every 8 pairs) pairs are answered
-    /// from memory.
-    fn run_chunk(&self, positions: &[u32], deadline: Option<Instant>, out: &mut Vec<Answer>) {
-        let mut query = AdbQuery {
+    /// The ADB query settings of this run.
+    fn query(&self) -> AdbQuery {
+        AdbQuery {
             k_min: self.config.k_min,
             exact_leaves: self.config.adb_exact_leaves,
             ..AdbQuery::default()
-        };
+        }
+    }
+
+    /// Runs the jobs at `positions`; past `deadline` (read every 8 pairs) pairs are answered
+    /// from memory.
+    fn run_chunk(&self, positions: &[u32], deadline: Option<Instant>, out: &mut Vec<Answer>) {
+        let mut query = self.query();
         let mut late = false;
         with_workspaces(|exact, adb, pairs| {
             out.extend(positions.iter().enumerate().map(|(k, &pos)| {
                 if k % 8 == 0 && !late {
                     late = deadline.is_some_and(|d| Instant::now() > d);
                 }
-                let job = &self.jobs[pos as usize];
-                let o = self.run_job(job, late, &mut query, exact, adb, pairs);
-                let (ea, eb) = (
-                    &self.entries[job.pair.a as usize],
-                    &self.entries[job.pair.b as usize],
-                );
-                // An answer from memory keeps the memory (with the run it was computed
-                // in, so a pair that stops moving can be cached); a test makes a new one.
-                let memory = match (o.method, job.last) {
-                    (Method::Coherence, Some(i)) => PairMemory {
-                        stale: self.memory[i as usize].stale + 1,
-                        ..self.memory[i as usize]
-                    },
-                    (Method::Cached, Some(i)) => self.memory[i as usize],
-                    _ => PairMemory {
-                        probability: o.probability,
-                        collides: o.collides,
-                        settled: !o.budget_exhausted
-                            && o.method != Method::Coherence
-                            && both_rigid(ea, eb),
-                        stale: 0,
-                        tested_run: self.run,
-                        contact: o.contacts.first().copied(),
-                    },
-                };
-                (pos, o, memory)
+                self.answer(pos, late, &mut query, exact, adb, pairs)
             }));
         });
+    }
+
+    /// The answer of the job at `pos` (from memory when `late`) and the memory it leaves.
+    fn answer(
+        &self,
+        pos: u32,
+        late: bool,
+        query: &mut AdbQuery,
+        exact: &mut QueryWorkspace,
+        adb: &mut AdbWorkspace,
+        pairs: &mut Vec<TrianglePair>,
+    ) -> Answer {
+        let job = &self.jobs[pos as usize];
+        let o = self.run_job(job, late, query, exact, adb, pairs);
+        let (ea, eb) = (
+            &self.entries[job.pair.a as usize],
+            &self.entries[job.pair.b as usize],
+        );
+        // An answer from memory keeps the memory (with the run it was computed in, so a pair
+        // that stops moving can be cached); a test makes a new one.
+        let memory = match (o.method, job.last) {
+            (Method::Coherence, Some(i)) => PairMemory {
+                stale: self.memory[i as usize].stale + 1,
+                ..self.memory[i as usize]
+            },
+            (Method::Cached, Some(i)) => self.memory[i as usize],
+            _ => PairMemory {
+                probability: o.probability,
+                collides: o.collides,
+                settled: !o.budget_exhausted && o.method != Method::Coherence && both_rigid(ea, eb),
+                stale: 0,
+                tested_run: self.run,
+                contact: o.contacts.first().copied(),
+            },
+        };
+        (pos, o, memory)
     }
 
     fn run_job(

@@ -8,7 +8,7 @@ use bevy_ecs::schedule::ScheduleLabel;
 
 use super::broad_phase::{BroadPhaseState, CandidatePairs, sweep_and_prune};
 use super::components::Fidelity;
-use super::diagnostics::{CollisionDiagnostics, begin_frame, end_frame};
+use super::diagnostics::{CollisionDiagnostics, begin_frame};
 use super::events::{
     CollisionEnded, CollisionError, CollisionStarted, Contact, ContactQueue, ReportState,
     report_collisions,
@@ -205,7 +205,7 @@ impl Plugin for StochasticCollisionPlugin {
                     )
                         .chain()
                         .in_set(Tracking),
-                    (report_collisions, end_frame).chain().in_set(Report),
+                    report_collisions.in_set(Report),
                 ),
             );
         #[cfg(feature = "transform")]
