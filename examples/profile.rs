@@ -260,7 +260,7 @@ fn report(
         mib(rss_end)
     );
     println!(
-        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} past the deadline), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs",
+        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs",
         c.node_pairs,
         c.adb_pairs,
         c.budget_exhausted_pairs,
@@ -269,9 +269,23 @@ fn report(
         c.cached_pairs,
         agreement
     );
+    let test_ms = c.test_time.as_secs_f64() * 1e3;
+    let per_ms = |n: u64| {
+        if test_ms > 0.0 {
+            n as f64 / test_ms
+        } else {
+            0.0
+        }
+    };
+    println!(
+        "narrow-phase throughput: {} pair tests in {test_ms:.1} ms of testing: {:.0} tests/ms, {:.0} node pairs/ms",
+        c.tested_pairs,
+        per_ms(c.tested_pairs),
+        per_ms(c.node_pairs)
+    );
     if let Some(path) = &args.json {
         let json = format!(
-            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}}}\n}}\n",
+            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
             args.scene.name(),
             records.len(),
             args.options.threads,
@@ -292,6 +306,9 @@ fn report(
             c.coherence_pairs,
             c.exact_pairs,
             c.cached_pairs,
+            c.tested_pairs,
+            per_ms(c.tested_pairs),
+            per_ms(c.node_pairs),
         );
         match std::fs::write(path, json) {
             Ok(()) => println!("wrote {path}"),

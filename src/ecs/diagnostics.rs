@@ -77,9 +77,15 @@ pub struct CollisionCounters {
     pub adb_pairs: u64,
     /// ADB pairs that ran out of their slice.
     pub budget_exhausted_pairs: u64,
-    /// ADB pairs not tested because the time budget's deadline had passed (answered from the
-    /// previous run, see [`Method::Coherence`](super::Method::Coherence)).
+    /// Pairs not tested under a time budget (not among the most urgent that fit, or past the
+    /// deadline), answered from the previous run (see
+    /// [`Method::Coherence`](super::Method::Coherence)).
     pub coherence_pairs: u64,
+    /// Pairs answered by a test (ADB or exact) in the narrow phase.
+    pub tested_pairs: u64,
+    /// Wall-clock time of the narrow phase's parallel tests, summed over runs: with
+    /// `tested_pairs` and `node_pairs`, the narrow phase's throughput.
+    pub test_time: Duration,
     /// Pairs not tested because neither entity moved (see [`Method::Cached`](super::Method::Cached)).
     pub cached_pairs: u64,
     /// Pairs tested exactly.

@@ -268,18 +268,25 @@ pub fn narrow_phase(
         adb_pairs += u64::from(j.method == Method::Adb);
         j.method != Method::Tracking
     });
-    // Which pairs are tested: all of them, or under a time budget the most urgent that fit.
+    // Which pairs are tested: all of them, or under a time budget the exact pairs (asked for:
+    // level geometry, things that must not pass through each other) and the most urgent of
+    // the others that fit.
     let testable = |j: &Job| !j.cached && j.method != Method::Bounds;
-    let (test_count, deadline) = match config.budget {
+    let optional = |j: &Job| testable(j) && j.method != Method::Exact;
+    let cut = match config.budget {
         FrameBudget::Time(budget) => {
             let n = jobs.iter().filter(|j| testable(j)).count();
             let (count, deadline) =
                 tests_that_fit(budget, n, jobs.len(), &diag, &state.costs, Instant::now());
-            (Some(count), Some(deadline))
+            let exact = n - jobs.iter().filter(|j| optional(j)).count();
+            Some((
+                priority_cut(jobs, count.saturating_sub(exact), optional),
+                deadline,
+            ))
         }
-        _ => (None, None),
+        _ => None,
     };
-    let cut = test_count.map(|count| priority_cut(jobs, count, testable));
+    let deadline = cut.map(|(_, d)| d);
     let tested = &mut state.tested;
     tested.clear();
     let mut taken_at_cut = 0;
@@ -287,8 +294,9 @@ pub fn narrow_phase(
         let test = testable(j)
             && match cut {
                 None => true,
-                Some((bucket, _)) if j.bucket < bucket => true,
-                Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
+                Some(_) if j.method == Method::Exact => true,
+                Some(((bucket, _), _)) if j.bucket < bucket => true,
+                Some(((bucket, room), _)) if j.bucket == bucket && taken_at_cut < room => {
                     taken_at_cut += 1;
                     true
                 }
@@ -356,6 +364,7 @@ pub fn narrow_phase(
             c.budget_exhausted_pairs += u64::from(o.budget_exhausted);
             c.coherence_pairs += u64::from(o.method == Method::Coherence);
             c.cached_pairs += u64::from(o.method == Method::Cached);
+            c.tested_pairs += u64::from(matches!(o.method, Method::Adb | Method::Exact));
             state.history_keys.push((o.a, o.b));
             state.history.push(m);
             state.outcomes.push(o);
@@ -364,6 +373,7 @@ pub fn narrow_phase(
     let merge_time = merge_start.elapsed();
     c.node_pairs += np;
     c.adb_pairs += adb_pairs;
+    c.test_time += test_time;
     state
         .rate
         .update(np, state.tested.len(), test_time.as_secs_f64() * 1e6);
@@ -458,11 +468,11 @@ fn tests_that_fit(
     (count, now + Duration::from_secs_f64(tests_us * 1e-6))
 }
 
-/// The priority bucket at which `count` testable jobs are reached (from the most urgent), and
-/// how many of that bucket fit.
-fn priority_cut(jobs: &[Job], count: usize, testable: impl Fn(&Job) -> bool) -> (u8, usize) {
+/// The priority bucket at which `count` of the jobs `eligible` are reached (from the most
+/// urgent), and how many of that bucket fit.
+fn priority_cut(jobs: &[Job], count: usize, eligible: impl Fn(&Job) -> bool) -> (u8, usize) {
     let mut per_bucket = [0usize; BUCKETS];
-    for j in jobs.iter().filter(|j| testable(j)) {
+    for j in jobs.iter().filter(|j| eligible(j)) {
         per_bucket[usize::from(j.bucket)] += 1;
     }
     let mut before = 0;
