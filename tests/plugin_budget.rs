@@ -7,7 +7,7 @@ use std::time::Duration;
 use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
 use plugin_support::*;
-use stochastic_collision::ecs::CollisionCounters;
+use stochastic_collision::ecs::{CollisionCounters, Method, PairOutcomes};
 use stochastic_collision::prelude::*;
 
 /// A cluster of overlapping detailed spheres: many ADB pairs that need work to settle.
@@ -89,6 +89,58 @@ fn an_exhausted_time_budget_answers_from_the_last_run() {
     );
     assert_eq!(log(&app).ended.len(), 0, "no contact was dropped");
     assert_eq!(log(&app).started.len(), touching);
+}
+
+#[test]
+fn exact_pairs_are_tested_even_when_the_time_budget_is_spent() {
+    // The cluster on a moving slab of level geometry (exact): with no time left the ADB pairs
+    // keep their last answers, but the slab's pairs are still tested (nothing may fall through
+    // level geometry because the frame was busy).
+    let mut app = cluster(CollisionConfig {
+        budget: FrameBudget::Unlimited,
+        ..Default::default()
+    });
+    let slab = Collider::new(generate::cuboid(Vec3::new(5.0, 0.5, 5.0), 4));
+    let floor = app
+        .world_mut()
+        .spawn((
+            slab,
+            ColliderPose::from_translation(Vec3::new(3.2, -1.2, 3.2)),
+            Fidelity::Exact,
+        ))
+        .id();
+    app.update();
+    app.world_mut().resource_mut::<CollisionConfig>().budget =
+        FrameBudget::Time(Duration::from_nanos(1));
+    for run in 0..3 {
+        let before = counters(&app);
+        // The slab moves a hair each run, so its pairs cannot be answered from memory.
+        app.world_mut()
+            .get_mut::<ColliderPose>(floor)
+            .unwrap()
+            .0
+            .translation
+            .y += 1e-4;
+        app.update();
+        let after = counters(&app);
+        let outcomes = app.world().resource::<PairOutcomes>().outcomes();
+        let slab_pairs = outcomes
+            .iter()
+            .filter(|o| o.a == floor || o.b == floor)
+            .count();
+        assert!(slab_pairs >= 5, "run {run}: {slab_pairs} slab pairs");
+        assert_eq!(
+            after.exact_pairs - before.exact_pairs,
+            slab_pairs as u64,
+            "run {run}: every slab pair tested"
+        );
+        assert!(
+            outcomes
+                .iter()
+                .filter(|o| o.a != floor && o.b != floor)
+                .all(|o| matches!(o.method, Method::Coherence | Method::Cached))
+        );
+    }
 }
 
 #[derive(Resource, Default)]

@@ -4,7 +4,7 @@
 mod plugin_support;
 
 use plugin_support::*;
-use stochastic_collision::ecs::{CollisionErrorKind, TrackingState};
+use stochastic_collision::ecs::{ColliderFrame, CollisionErrorKind, TrackingState};
 use stochastic_collision::prelude::*;
 
 #[test]
@@ -37,8 +37,11 @@ fn infinite_pose_is_an_error_for_that_entity_only() {
 
 #[test]
 fn swapping_a_collider_mid_contact_ends_and_restarts_consistently() {
+    // Rigid pairs at rest are answered from memory (cached) until a pose or the geometry
+    // changes: the swap itself must count as a change.
     for fidelity in [
         Fidelity::Exact,
+        Fidelity::Adb { p_min: 0.99 },
         Fidelity::Tracking {
             pairs_per_frame: 16,
         },
@@ -127,4 +130,34 @@ fn a_tracked_deformable_with_an_infinite_vertex_is_skipped_and_recovers() {
             .tracker(cloth, cloth)
             .is_some()
     );
+}
+
+#[test]
+fn a_collider_swapped_at_rest_is_tested_again_not_answered_from_memory() {
+    // Two balls at rest, touching: after a few runs their pair is answered from memory (neither
+    // pose changes). Then the second gets a mesh that stays inside the same boxes (the broad
+    // phase keeps the pair) but no longer touches the first: the contact must end.
+    let tucked_away = {
+        let small = generate::icosphere(0.2, 2);
+        let offset = Vec3::new(-0.6, 0.75, 0.75);
+        let moved: Vec<Vec3> = small.positions().iter().map(|&p| p + offset).collect();
+        Collider::new(TriMesh::new(moved, small.triangles().to_vec()).unwrap())
+    };
+    for fidelity in [Fidelity::Exact, Fidelity::Adb { p_min: 0.99 }] {
+        let mut app = app();
+        let a = spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0), fidelity));
+        let b = spawn(&mut app, (ball(1.0), at(1.5, 0.0, 0.0), fidelity));
+        for _ in 0..4 {
+            app.update();
+        }
+        assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
+        app.world_mut().entity_mut(b).insert(tucked_away.clone());
+        for _ in 0..3 {
+            app.update();
+        }
+        let frame = app.world().resource::<ColliderFrame>();
+        let (ba, bb) = (frame.get(a).unwrap().aabb, frame.get(b).unwrap().aabb);
+        assert!(ba.intersects(&bb), "the boxes still overlap");
+        assert_eq!(log(&app).ended, vec![pair(a, b)], "{fidelity:?}");
+    }
 }

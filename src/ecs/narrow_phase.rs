@@ -21,9 +21,7 @@ use super::plugin::{CollisionConfig, FrameBudget};
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderFrame, Geometry};
 use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
-use crate::bvh::{
-    QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with, root_boxes_overlap,
-};
+use crate::bvh::{QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with};
 
 /// How a pair's answer was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -41,13 +39,12 @@ pub enum Method {
     /// Not tested: neither rigid entity moved since the last run (identical poses, e.g.
     /// sleeping bodies) and the last answer was settled, so it is reused as is.
     Cached,
-    /// Not tested: the time budget's deadline passed before the pair's turn. A pair that
-    /// collided in the previous run keeps that answer and contact (temporal coherence); any
-    /// other pair gets the oriented root-box test: for an exact pair, overlapping boxes count
-    /// as a contact with probability 0.5 and a box contact (level geometry must not be passed
-    /// through); the others keep "not colliding" (with the last probability). Reused contacts
-    /// have depth 0 (they stop approach without pushing the same correction twice). Either way
-    /// the pair waits less in the next run.
+    /// Not tested: under a time budget, the pair was not among the most urgent that fit (or
+    /// the deadline passed before its turn). A pair that collided in the previous run keeps
+    /// that answer and contact (temporal coherence); any other keeps "not colliding" (with the
+    /// last probability). Reused contacts have depth 0 (they stop approach without pushing the
+    /// same correction twice). Either way the pair waits less in the next run. Exact pairs
+    /// (the fidelity asked for them) are always tested.
     Coherence,
 }
 
@@ -534,6 +531,8 @@ impl Context<'_> {
                 if k % 8 == 0 && !late {
                     late = deadline.is_some_and(|d| Instant::now() > d);
                 }
+                // Exact pairs were asked for: the deadline does not cut them.
+                let late = late && self.jobs[pos as usize].method != Method::Exact;
                 self.answer(pos, late, &mut query, exact, adb, pairs)
             }));
         });
@@ -614,7 +613,7 @@ impl Context<'_> {
                 out.probability = 1.0;
                 out.contacts.push(bounds_contact(ea, eb));
             }
-            Method::Adb | Method::Exact if late => {
+            Method::Adb if late => {
                 out.method = Method::Coherence;
                 match last {
                     Some(m) if m.collides => {
@@ -625,18 +624,7 @@ impl Context<'_> {
                         out.contacts
                             .extend(m.contact.map(|c| ContactPoint { depth: 0.0, ..c }));
                     }
-                    // An exact pair (level geometry, things that must not pass through each
-                    // other), new or apart last time: err on the side of a contact.
-                    _ if job.method == Method::Exact
-                        && root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) =>
-                    {
-                        out.collides = true;
-                        out.probability = 0.5;
-                        let mut c = bounds_contact(ea, eb);
-                        c.depth *= 0.5;
-                        out.contacts.push(c);
-                    }
-                    // Other pairs: "not colliding", as uncertain as last time.
+                    // Otherwise "not colliding", as uncertain as last time.
                     _ => out.probability = last.map_or(0.5, |m| m.probability),
                 }
             }
