@@ -92,10 +92,11 @@ fn an_exhausted_time_budget_answers_from_the_last_run() {
 }
 
 #[test]
-fn exact_pairs_are_tested_even_when_the_time_budget_is_spent() {
-    // The cluster on a moving slab of level geometry (exact): with no time left the ADB pairs
-    // keep their last answers, but the slab's pairs are still tested (nothing may fall through
-    // level geometry because the frame was busy).
+fn level_geometry_holds_when_the_time_budget_is_spent() {
+    // The cluster, then a slab of level geometry (exact) rising into it while no time at all
+    // is left: no pair is tested, the ADB pairs keep their last answers, and every slab pair
+    // whose oriented boxes overlap reports a contact (nothing may pass through level geometry
+    // because the frame was busy).
     let mut app = cluster(CollisionConfig {
         budget: FrameBudget::Unlimited,
         ..Default::default()
@@ -105,41 +106,39 @@ fn exact_pairs_are_tested_even_when_the_time_budget_is_spent() {
         .world_mut()
         .spawn((
             slab,
-            ColliderPose::from_translation(Vec3::new(3.2, -1.2, 3.2)),
+            ColliderPose::from_translation(Vec3::new(3.2, -2.0, 3.2)),
             Fidelity::Exact,
         ))
         .id();
     app.update();
     app.world_mut().resource_mut::<CollisionConfig>().budget =
         FrameBudget::Time(Duration::from_nanos(1));
-    for run in 0..3 {
-        let before = counters(&app);
-        // The slab moves a hair each run, so its pairs cannot be answered from memory.
+    for run in 0..4 {
         app.world_mut()
             .get_mut::<ColliderPose>(floor)
             .unwrap()
             .0
             .translation
-            .y += 1e-4;
+            .y += 0.2;
         app.update();
-        let after = counters(&app);
         let outcomes = app.world().resource::<PairOutcomes>().outcomes();
-        let slab_pairs = outcomes
+        let slab_pairs: Vec<_> = outcomes
             .iter()
             .filter(|o| o.a == floor || o.b == floor)
-            .count();
-        assert!(slab_pairs >= 5, "run {run}: {slab_pairs} slab pairs");
-        assert_eq!(
-            after.exact_pairs - before.exact_pairs,
-            slab_pairs as u64,
-            "run {run}: every slab pair tested"
-        );
-        assert!(
-            outcomes
-                .iter()
-                .filter(|o| o.a != floor && o.b != floor)
-                .all(|o| matches!(o.method, Method::Coherence | Method::Cached))
-        );
+            .collect();
+        for o in &slab_pairs {
+            assert!(
+                o.collides && o.probability >= 0.5 && !o.contacts.is_empty(),
+                "run {run}: {o:?}"
+            );
+        }
+        if run == 3 {
+            assert!(slab_pairs.len() >= 5, "{} slab pairs", slab_pairs.len());
+        }
+        assert!(outcomes
+            .iter()
+            .filter(|o| o.a != floor && o.b != floor)
+            .all(|o| matches!(o.method, Method::Coherence | Method::Cached)));
     }
 }
 

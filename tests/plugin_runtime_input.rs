@@ -3,6 +3,8 @@
 //! entity is reported and skipped, the rest go on, and events stay consistent.
 mod plugin_support;
 
+use bevy_app::App;
+use bevy_ecs::entity::Entity;
 use plugin_support::*;
 use stochastic_collision::ecs::{ColliderFrame, CollisionErrorKind, TrackingState};
 use stochastic_collision::prelude::*;
@@ -35,6 +37,18 @@ fn infinite_pose_is_an_error_for_that_entity_only() {
     assert!(l.ended.is_empty());
 }
 
+/// Two balls at rest, touching, after a few runs (their contact started once).
+fn touching_balls(fidelity: Fidelity) -> (App, Entity, Entity) {
+    let mut app = app();
+    let a = spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0), fidelity));
+    let b = spawn(&mut app, (ball(1.0), at(1.5, 0.0, 0.0), fidelity));
+    for _ in 0..4 {
+        app.update();
+    }
+    assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
+    (app, a, b)
+}
+
 #[test]
 fn swapping_a_collider_mid_contact_ends_and_restarts_consistently() {
     // Rigid pairs at rest are answered from memory (cached) until a pose or the geometry
@@ -46,13 +60,7 @@ fn swapping_a_collider_mid_contact_ends_and_restarts_consistently() {
             pairs_per_frame: 16,
         },
     ] {
-        let mut app = app();
-        let a = spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0), fidelity));
-        let b = spawn(&mut app, (ball(1.0), at(1.5, 0.0, 0.0), fidelity));
-        for _ in 0..3 {
-            app.update();
-        }
-        assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
+        let (mut app, a, b) = touching_balls(fidelity);
         // A smaller mesh no longer reaches the other: the contact ends, once.
         app.world_mut().entity_mut(b).insert(ball(0.2));
         for _ in 0..3 {
@@ -144,13 +152,7 @@ fn a_collider_swapped_at_rest_is_tested_again_not_answered_from_memory() {
         Collider::new(TriMesh::new(moved, small.triangles().to_vec()).unwrap())
     };
     for fidelity in [Fidelity::Exact, Fidelity::Adb { p_min: 0.99 }] {
-        let mut app = app();
-        let a = spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0), fidelity));
-        let b = spawn(&mut app, (ball(1.0), at(1.5, 0.0, 0.0), fidelity));
-        for _ in 0..4 {
-            app.update();
-        }
-        assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
+        let (mut app, a, b) = touching_balls(fidelity);
         app.world_mut().entity_mut(b).insert(tucked_away.clone());
         for _ in 0..3 {
             app.update();

@@ -21,7 +21,9 @@ use super::plugin::{CollisionConfig, FrameBudget};
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderFrame, Geometry};
 use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
-use crate::bvh::{QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with};
+use crate::bvh::{
+    QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with, root_boxes_overlap,
+};
 
 /// How a pair's answer was found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -39,12 +41,15 @@ pub enum Method {
     /// Not tested: neither rigid entity moved since the last run (identical poses, e.g.
     /// sleeping bodies) and the last answer was settled, so it is reused as is.
     Cached,
-    /// Not tested: under a time budget, the pair was not among the most urgent that fit (or
-    /// the deadline passed before its turn). A pair that collided in the previous run keeps
-    /// that answer and contact (temporal coherence); any other keeps "not colliding" (with the
-    /// last probability). Reused contacts have depth 0 (they stop approach without pushing the
-    /// same correction twice). Either way the pair waits less in the next run. Exact pairs
-    /// (the fidelity asked for them) are always tested.
+    /// Not tested: under a time budget, the pair was not among the most urgent that fit, or
+    /// the deadline passed before its turn (exact pairs are always chosen and tested first,
+    /// so only an overload of exact pairs alone cuts them). A pair that collided in the
+    /// previous run keeps that answer and contact (temporal coherence); any other pair gets
+    /// the oriented root-box test: for an exact pair, overlapping boxes count as a contact with
+    /// probability 0.5 and a box contact (level geometry must not be passed through); the
+    /// others keep "not colliding" (with the last probability). Reused contacts have depth 0
+    /// (they stop approach without pushing the same correction twice). Either way the pair
+    /// waits less in the next run.
     Coherence,
 }
 
@@ -111,6 +116,7 @@ pub struct PairOutcomes {
     jobs: Vec<Job>,
     tested: Vec<u32>,
     tested_done: Vec<Vec<Answer>>,
+    exact_done: Vec<Answer>,
     pub(crate) rate: WorkRate,
     pub(crate) costs: PairCosts,
     pub(crate) exact_node_pairs: f64,
@@ -181,6 +187,18 @@ struct Job {
     slice: u64,
     /// Index of the pair's last answer.
     last: Option<u32>,
+}
+
+impl Job {
+    /// Needs a test (not answered from a still valid memory, not a bounds-only pair).
+    fn testable(&self) -> bool {
+        !self.cached && self.method != Method::Bounds
+    }
+
+    /// Needs a test, and is tested only if the budget allows (not an exact pair).
+    fn optional(&self) -> bool {
+        self.testable() && self.method != Method::Exact
+    }
 }
 
 #[derive(Default)]
@@ -268,41 +286,19 @@ pub fn narrow_phase(
     // Which pairs are tested: all of them, or under a time budget the exact pairs (asked for:
     // level geometry, things that must not pass through each other) and the most urgent of
     // the others that fit.
-    let testable = |j: &Job| !j.cached && j.method != Method::Bounds;
-    let optional = |j: &Job| testable(j) && j.method != Method::Exact;
-    let cut = match config.budget {
+    let (cut, deadline) = match config.budget {
         FrameBudget::Time(budget) => {
-            let n = jobs.iter().filter(|j| testable(j)).count();
+            let n = jobs.iter().filter(|j| j.testable()).count();
             let (count, deadline) =
                 tests_that_fit(budget, n, jobs.len(), &diag, &state.costs, Instant::now());
-            let exact = n - jobs.iter().filter(|j| optional(j)).count();
-            Some((
-                priority_cut(jobs, count.saturating_sub(exact), optional),
-                deadline,
-            ))
+            let exact = n - jobs.iter().filter(|j| j.optional()).count();
+            let cut = priority_cut(jobs, count.saturating_sub(exact), Job::optional);
+            (Some(cut), Some(deadline))
         }
-        _ => None,
+        _ => (None, None),
     };
-    let deadline = cut.map(|(_, d)| d);
     let tested = &mut state.tested;
-    tested.clear();
-    let mut taken_at_cut = 0;
-    for (pos, j) in jobs.iter().enumerate() {
-        let test = testable(j)
-            && match cut {
-                None => true,
-                Some(_) if j.method == Method::Exact => true,
-                Some(((bucket, _), _)) if j.bucket < bucket => true,
-                Some(((bucket, room), _)) if j.bucket == bucket && taken_at_cut < room => {
-                    taken_at_cut += 1;
-                    true
-                }
-                Some(_) => false,
-            };
-        if test {
-            tested.push(pos as u32);
-        }
-    }
+    let exact_tested = choose_tests(jobs, cut, tested);
     // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
     let is_adb = |&&i: &&u32| jobs[i as usize].method == Method::Adb;
     let total = node_budget(&config, deadline, start, state.rate, state.exact_node_pairs);
@@ -330,7 +326,7 @@ pub fn narrow_phase(
         config: &config,
         run: diag.frame,
     };
-    // The tests in parallel (in pair order; the deadline is a safety net).
+    // The tests in parallel (the deadline is a safety net).
     let run_start = Instant::now();
     let chunk = pool.chunk_size(tested.len(), 8);
     let tested_done = &mut state.tested_done;
@@ -338,18 +334,24 @@ pub fn narrow_phase(
         ctx.run_chunk(c, deadline, out);
     });
     let test_time = run_start.elapsed();
-    // In pair order (by entity), whatever the thread count: the test answers, and the others
-    // answered from memory on the way.
+    // In pair order (by entity), whatever the thread count: the exact and the other test
+    // answers (each already in pair order), and the rest answered from memory on the way.
     let merge_start = Instant::now();
-    let mut tested_iter = tested_done.iter_mut().flat_map(|v| v.drain(..));
-    let mut next_tested = tested_iter.next();
+    let mut done = tested_done.iter_mut().flat_map(|v| v.drain(..));
+    let exact_done = &mut state.exact_done;
+    exact_done.clear();
+    exact_done.extend(done.by_ref().take(exact_tested));
+    let mut exact_iter = exact_done.drain(..);
+    let (mut next_exact, mut next_other) = (exact_iter.next(), done.next());
     let c = &mut diag.counters;
     let (mut np, mut exact_np) = (0, 0);
     with_workspaces(|exact, adb, pairs| {
         let mut query = ctx.query();
         for pos in 0..jobs.len() as u32 {
-            let (_, o, m) = if next_tested.as_ref().is_some_and(|t| t.0 == pos) {
-                std::mem::replace(&mut next_tested, tested_iter.next()).expect("checked")
+            let (_, o, m) = if next_exact.as_ref().is_some_and(|t| t.0 == pos) {
+                std::mem::replace(&mut next_exact, exact_iter.next()).expect("checked")
+            } else if next_other.as_ref().is_some_and(|t| t.0 == pos) {
+                std::mem::replace(&mut next_other, done.next()).expect("checked")
             } else {
                 ctx.answer(pos, true, &mut query, exact, adb, pairs)
             };
@@ -419,6 +421,10 @@ fn plan_jobs(
         // Settled, and neither pose nor geometry changed since: the answer still holds.
         job.cached =
             memory.is_some_and(|m| m.settled && m.tested_run >= ea.still_since.max(eb.still_since));
+        // A cached answer that does not collide needs no priority (no test, no contact).
+        if job.cached && !memory.is_some_and(|m| m.collides) {
+            continue;
+        }
         let mut priority = pair_priority(
             memory.map(|m| m.probability),
             &ea.aabb,
@@ -465,9 +471,36 @@ fn tests_that_fit(
     (count, now + Duration::from_secs_f64(tests_us * 1e-6))
 }
 
+/// The positions of the jobs to test, into `tested`: every testable exact job first (a
+/// deadline then cuts the others first), then the optional ones above the `cut` (all of them
+/// without a cut), each part in pair order. Returns the number of exact ones.
+fn choose_tests(jobs: &[Job], cut: Option<(u8, usize)>, tested: &mut Vec<u32>) -> usize {
+    tested.clear();
+    let exact = |j: &Job| j.testable() && j.method == Method::Exact;
+    tested.extend((0..jobs.len() as u32).filter(|&i| exact(&jobs[i as usize])));
+    let exact_tested = tested.len();
+    let mut taken_at_cut = 0;
+    for (pos, j) in jobs.iter().enumerate() {
+        let test = j.optional()
+            && match cut {
+                None => true,
+                Some((bucket, _)) if j.bucket < bucket => true,
+                Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
+                    taken_at_cut += 1;
+                    true
+                }
+                Some(_) => false,
+            };
+        if test {
+            tested.push(pos as u32);
+        }
+    }
+    exact_tested
+}
+
 /// The priority bucket at which `count` of the jobs `eligible` are reached (from the most
 /// urgent), and how many of that bucket fit.
-fn priority_cut(jobs: &[Job], count: usize, eligible: impl Fn(&Job) -> bool) -> (u8, usize) {
+fn priority_cut(jobs: &[Job], count: usize, eligible: fn(&Job) -> bool) -> (u8, usize) {
     let mut per_bucket = [0usize; BUCKETS];
     for j in jobs.iter().filter(|j| eligible(j)) {
         per_bucket[usize::from(j.bucket)] += 1;
@@ -531,8 +564,6 @@ impl Context<'_> {
                 if k % 8 == 0 && !late {
                     late = deadline.is_some_and(|d| Instant::now() > d);
                 }
-                // Exact pairs were asked for: the deadline does not cut them.
-                let late = late && self.jobs[pos as usize].method != Method::Exact;
                 self.answer(pos, late, &mut query, exact, adb, pairs)
             }));
         });
@@ -613,7 +644,7 @@ impl Context<'_> {
                 out.probability = 1.0;
                 out.contacts.push(bounds_contact(ea, eb));
             }
-            Method::Adb if late => {
+            Method::Adb | Method::Exact if late => {
                 out.method = Method::Coherence;
                 match last {
                     Some(m) if m.collides => {
@@ -624,7 +655,18 @@ impl Context<'_> {
                         out.contacts
                             .extend(m.contact.map(|c| ContactPoint { depth: 0.0, ..c }));
                     }
-                    // Otherwise "not colliding", as uncertain as last time.
+                    // An exact pair (level geometry, things that must not pass through each
+                    // other), new or apart last time: err on the side of a contact.
+                    _ if job.method == Method::Exact
+                        && root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) =>
+                    {
+                        out.collides = true;
+                        out.probability = 0.5;
+                        let mut c = bounds_contact(ea, eb);
+                        c.depth *= 0.5;
+                        out.contacts.push(c);
+                    }
+                    // Other pairs: "not colliding", as uncertain as last time.
                     _ => out.probability = last.map_or(0.5, |m| m.probability),
                 }
             }
@@ -715,5 +757,87 @@ fn bounds_contact(a: &ColliderEntry, b: &ColliderEntry) -> ContactPoint {
         normal,
         depth: overlap[axis],
         triangles: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job(method: Method, priority: f32, cached: bool) -> Job {
+        Job {
+            pair: CandidatePair { a: 0, b: 1 },
+            method,
+            bucket: priority_bucket(priority),
+            cached,
+            p_min: 1.0,
+            priority,
+            slice: u64::MAX,
+            last: None,
+        }
+    }
+
+    #[test]
+    fn buckets_follow_the_priority_in_quarter_octaves() {
+        let b = |p: f32| priority_bucket(p);
+        assert_eq!(b(16.0), 0);
+        assert_eq!(b(1000.0), 0);
+        assert_eq!(b(1.0), 15);
+        assert_eq!(b(0.0625), 31);
+        assert_eq!(b(0.0), 31);
+        assert_eq!(b(1.0) - b(2.0), 4);
+        let mut last = 0;
+        for k in 0..400 {
+            let bucket = b(20.0 * 0.98f32.powi(k));
+            assert!(bucket >= last, "monotone");
+            last = bucket;
+        }
+    }
+
+    #[test]
+    fn exact_jobs_come_first_then_the_most_urgent_that_fit() {
+        let jobs = [
+            job(Method::Adb, 0.5, false),
+            job(Method::Exact, 0.1, false),
+            job(Method::Adb, 8.0, false),
+            job(Method::Adb, 9.0, true),
+            job(Method::Bounds, 9.0, false),
+            job(Method::Adb, 2.0, false),
+            job(Method::Exact, 0.1, true),
+            job(Method::Adb, 2.0, false),
+        ];
+        let mut tested = Vec::new();
+        // Two optional tests fit: the 8.0 job and the first 2.0 job (pair order in a bucket).
+        let cut = priority_cut(&jobs, 2, Job::optional);
+        assert_eq!(choose_tests(&jobs, Some(cut), &mut tested), 1);
+        assert_eq!(tested, vec![1, 2, 5]);
+        // No cut (work budgets): every testable job, exact first.
+        assert_eq!(choose_tests(&jobs, None, &mut tested), 1);
+        assert_eq!(tested, vec![1, 0, 2, 5, 7]);
+        // Nothing fits: the exact job still.
+        let cut = priority_cut(&jobs, 0, Job::optional);
+        choose_tests(&jobs, Some(cut), &mut tested);
+        assert_eq!(tested, vec![1]);
+    }
+
+    #[test]
+    fn the_tests_that_fit_follow_the_measured_costs() {
+        let diag = CollisionDiagnostics::default();
+        let costs = PairCosts {
+            test_us: 2.0,
+            merge_us: 0.1,
+            after: Duration::ZERO,
+        };
+        let now = diag.frame_start;
+        // 2000 µs, 5000 pairs merged at 0.1 µs: 1500 µs for tests of 2 µs.
+        let budget = Duration::from_micros(2000);
+        let (count, deadline) = tests_that_fit(budget, 10_000, 5000, &diag, &costs, now);
+        assert_eq!(count, 750);
+        assert_eq!(deadline - now, Duration::from_micros(1500));
+        // Never more than the testable ones.
+        assert_eq!(tests_that_fit(budget, 10, 5000, &diag, &costs, now).0, 10);
+        // Overhead beyond the budget: an eighth of it still goes to tests.
+        let (count, _) = tests_that_fit(budget, 10_000, 50_000, &diag, &costs, now);
+        assert_eq!(count, 125);
     }
 }
