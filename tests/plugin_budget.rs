@@ -135,10 +135,12 @@ fn level_geometry_holds_when_the_time_budget_is_spent() {
         if run == 3 {
             assert!(slab_pairs.len() >= 5, "{} slab pairs", slab_pairs.len());
         }
-        assert!(outcomes
-            .iter()
-            .filter(|o| o.a != floor && o.b != floor)
-            .all(|o| matches!(o.method, Method::Coherence | Method::Cached)));
+        assert!(
+            outcomes
+                .iter()
+                .filter(|o| o.a != floor && o.b != floor)
+                .all(|o| matches!(o.method, Method::Coherence | Method::Cached))
+        );
     }
 }
 
