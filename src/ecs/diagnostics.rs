@@ -111,6 +111,7 @@ pub struct CollisionDiagnostics {
     pub collision_time: Duration,
     stages: [StageRecord; 8],
     reserve: Duration,
+    narrow_end: Option<Instant>,
     /// Work counters.
     pub counters: CollisionCounters,
 }
@@ -123,6 +124,7 @@ impl Default for CollisionDiagnostics {
             collision_time: Duration::ZERO,
             stages: [StageRecord::default(); 8],
             reserve: Duration::ZERO,
+            narrow_end: None,
             counters: CollisionCounters::default(),
         }
     }
@@ -146,9 +148,15 @@ impl CollisionDiagnostics {
         r.total += time;
     }
 
-    /// Time to keep free after the narrow phase (what Tracking and Report took last run).
+    /// Time to keep free after the narrow phase: what came after it in the last run
+    /// (Tracking, Report and the scheduling between them).
     pub(crate) fn reserve_after_narrow(&self) -> Duration {
         self.reserve
+    }
+
+    /// Marks the end of the narrow phase in this run (for the reserve of the next).
+    pub(crate) fn narrow_phase_ended(&mut self) {
+        self.narrow_end = Some(Instant::now());
     }
 }
 
@@ -165,10 +173,14 @@ pub fn begin_frame(mut diag: ResMut<CollisionDiagnostics>) {
 /// Report stage (not a system of its own: one scheduling hop less per run).
 pub(crate) fn end_frame(diag: &mut CollisionDiagnostics, config: &CollisionConfig) {
     diag.collision_time = diag.frame_start.elapsed();
-    diag.reserve = [Stage::SelfCollision, Stage::Tracking, Stage::Report]
+    let after_stages: Duration = [Stage::SelfCollision, Stage::Tracking, Stage::Report]
         .iter()
         .filter_map(|&s| diag.stage(s).last)
         .sum();
+    diag.reserve = match diag.narrow_end.take() {
+        Some(end) => end.elapsed().max(after_stages),
+        None => after_stages,
+    };
     if let FrameBudget::Time(b) = config.budget
         && diag.collision_time > b
     {

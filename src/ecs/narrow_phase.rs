@@ -348,12 +348,24 @@ pub fn narrow_phase(
     with_workspaces(|exact, adb, pairs| {
         let mut query = ctx.query();
         for pos in 0..jobs.len() as u32 {
-            let (_, o, m) = if next_exact.as_ref().is_some_and(|t| t.0 == pos) {
-                std::mem::replace(&mut next_exact, exact_iter.next()).expect("checked")
+            let (o, m) = if next_exact.as_ref().is_some_and(|t| t.0 == pos) {
+                let (_, o, m) =
+                    std::mem::replace(&mut next_exact, exact_iter.next()).expect("checked");
+                (o, m)
             } else if next_other.as_ref().is_some_and(|t| t.0 == pos) {
-                std::mem::replace(&mut next_other, done.next()).expect("checked")
+                let (_, o, m) = std::mem::replace(&mut next_other, done.next()).expect("checked");
+                (o, m)
+            } else if let Some((o, m)) = ctx.remembered(pos) {
+                // The common case, kept lean: a cached or coherent answer from memory.
+                c.coherence_pairs += u64::from(o.method == Method::Coherence);
+                c.cached_pairs += u64::from(o.method == Method::Cached);
+                state.history_keys.push((o.a, o.b));
+                state.history.push(m);
+                state.outcomes.push(o);
+                continue;
             } else {
-                ctx.answer(pos, true, &mut query, exact, adb, pairs)
+                let (_, o, m) = ctx.answer(pos, true, &mut query, exact, adb, pairs);
+                (o, m)
             };
             np += o.node_pairs;
             if o.method == Method::Exact {
@@ -383,6 +395,7 @@ pub fn narrow_phase(
     costs.after = merge_start.elapsed().saturating_sub(merge_time);
     let elapsed = start.elapsed();
     diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
+    diag.narrow_phase_ended();
 }
 
 /// Fills in each job of a run of candidates (in pair order): its method (`Tracking`: handed
@@ -567,6 +580,50 @@ impl Context<'_> {
                 self.answer(pos, late, &mut query, exact, adb, pairs)
             }));
         });
+    }
+
+    /// The answer of an untested job from its memory, when it has one and is not a
+    /// bounds-only pair: [`Method::Cached`] if the memory still holds, else
+    /// [`Method::Coherence`] (an exact pair that did not collide gets [`Self::answer`]'s
+    /// root-box fallback instead: `None`).
+    fn remembered(&self, pos: u32) -> Option<(PairOutcome, PairMemory)> {
+        let job = &self.jobs[pos as usize];
+        let m = &self.memory[job.last? as usize];
+        let method = match job.method {
+            _ if job.cached => Method::Cached,
+            Method::Adb => Method::Coherence,
+            Method::Exact if m.collides => Method::Coherence,
+            _ => return None,
+        };
+        let (ea, eb) = (
+            &self.entries[job.pair.a as usize],
+            &self.entries[job.pair.b as usize],
+        );
+        let contact = m.contact.filter(|_| m.collides);
+        let outcome = PairOutcome {
+            a: ea.entity,
+            b: eb.entity,
+            method,
+            collides: m.collides,
+            probability: m.probability,
+            node_pairs: 0,
+            budget_exhausted: false,
+            priority: job.priority,
+            contacts: match (method, contact) {
+                (_, None) => SmallVec::new(),
+                (Method::Cached, Some(c)) => smallvec::smallvec![c],
+                // The old contact without its depth (see `Method::Coherence`).
+                (_, Some(c)) => smallvec::smallvec![ContactPoint { depth: 0.0, ..c }],
+            },
+        };
+        let memory = match method {
+            Method::Cached => *m,
+            _ => PairMemory {
+                stale: m.stale + 1,
+                ..*m
+            },
+        };
+        Some((outcome, memory))
     }
 
     /// The answer of the job at `pos` (from memory when `late`) and the memory it leaves.
