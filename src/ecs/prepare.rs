@@ -98,12 +98,14 @@ pub struct PrepareState {
     last_seen: EntityHashMap<LastSeen>,
 }
 
-/// An entity's pose and geometry in the last run it was valid, and since when they hold.
+/// An entity's pose and geometry in the last run it was valid, since when they hold, and its
+/// world box (before the margin).
 #[derive(Debug, Clone, Copy)]
 struct LastSeen {
     pose: Pose,
     geometry: usize,
     since: u64,
+    aabb: Aabb,
 }
 
 /// Run condition: some deformable mesh has new positions.
@@ -206,21 +208,29 @@ pub fn gather_colliders(
             continue;
         }
         let pose = normalized(&pose.0);
-        let aabb =
-            world_aabb(&geometry.mesh().bvh().root_aabb(), &pose).inflated(config.aabb_margin);
         // The geometry's identity: a swapped collider is a change (a deformable mesh is
         // refitted in place, but deformable pairs are never answered from memory).
-        let geometry_id = match &geometry {
-            Geometry::Rigid(t) => Arc::as_ptr(t) as usize,
-            Geometry::Deformable(m) => Arc::as_ptr(m) as usize,
+        let (geometry_id, rigid) = match &geometry {
+            Geometry::Rigid(t) => (Arc::as_ptr(t) as usize, true),
+            Geometry::Deformable(m) => (Arc::as_ptr(m) as usize, false),
+        };
+        let last = state.last_seen.get_mut(&entity);
+        let unchanged = last
+            .as_ref()
+            .is_some_and(|l| l.pose == pose && l.geometry == geometry_id);
+        // A rigid body that did not move keeps its box (sleeping bodies cost nothing here).
+        let tight = match &last {
+            Some(l) if unchanged && rigid => l.aabb,
+            _ => tight_world_aabb(geometry.mesh().bvh(), &pose),
         };
         let seen = LastSeen {
             pose,
             geometry: geometry_id,
             since: diag.frame,
+            aabb: tight,
         };
-        let (motion, since) = match state.last_seen.get_mut(&entity) {
-            Some(l) if l.pose == pose && l.geometry == geometry_id => (Vec3::ZERO, l.since),
+        let (motion, since) = match last {
+            Some(l) if unchanged => (Vec3::ZERO, l.since),
             Some(l) => {
                 let motion = pose.translation - l.pose.translation;
                 *l = seen;
@@ -231,6 +241,7 @@ pub fn gather_colliders(
                 (Vec3::ZERO, diag.frame)
             }
         };
+        let aabb = tight.inflated(config.aabb_margin);
         frame.entries.push(ColliderEntry {
             entity,
             self_collision: self_marker && deformable.is_some(),
@@ -271,6 +282,39 @@ fn normalized(pose: &Pose) -> Pose {
     Pose::new(pose.translation, pose.rotation.normalize())
 }
 
+/// The world box of a mesh under a rigid pose: the union of the world boxes of its tree's
+/// nodes a few levels down (up to [`TIGHT_LEVELS`] levels: 8 small boxes). A rotated box's
+/// world box grows by up to √3 per axis; smaller boxes grow less, so the union is much
+/// tighter than the root's (fewer broad-phase pairs that do not touch) for a few box
+/// transforms per moving body.
+pub(crate) fn tight_world_aabb(bvh: &crate::bvh::Bvh, pose: &Pose) -> Aabb {
+    let nodes = bvh.nodes();
+    let m = Mat3::from_quat(pose.rotation);
+    let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let mut out = Aabb::EMPTY;
+    let mut stack = [(0u32, 0u32); 2 * TIGHT_LEVELS as usize + 2];
+    let mut len = 1;
+    while len > 0 {
+        len -= 1;
+        let (i, level) = stack[len];
+        let node = &nodes[i as usize];
+        if node.is_leaf() || level == TIGHT_LEVELS {
+            let local = node.aabb();
+            let center = pose.translation + m * local.center();
+            let half = abs * local.half_extents();
+            out = out.union(&Aabb::new(center - half, center + half));
+        } else {
+            stack[len] = (node.left(), level + 1);
+            stack[len + 1] = (node.left() + 1, level + 1);
+            len += 2;
+        }
+    }
+    out
+}
+
+/// Levels of the tree below the root whose boxes make an entity's world box.
+const TIGHT_LEVELS: u32 = 3;
+
 /// The world box of a local box under a rigid pose.
 pub(crate) fn world_aabb(local: &Aabb, pose: &Pose) -> Aabb {
     let center = pose.transform_point(local.center());
@@ -278,4 +322,42 @@ pub(crate) fn world_aabb(local: &Aabb, pose: &Pose) -> Aabb {
     let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
     let half = abs * local.half_extents();
     Aabb::new(center - half, center + half)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::CollisionMesh;
+    use crate::mesh::generate;
+    use glam::Quat;
+
+    #[test]
+    fn the_tight_box_holds_every_vertex_inside_the_root_box() {
+        let meshes = [
+            generate::icosphere(1.0, 3),
+            generate::cuboid(Vec3::new(2.0, 0.1, 0.5), 4),
+            generate::torus(1.0, 0.2, 24, 8),
+        ];
+        for mesh in meshes {
+            let cm = CollisionMesh::new(mesh);
+            for k in 0..20 {
+                let axis = Vec3::new(1.0, k as f32 * 0.37, -0.5 + k as f32 * 0.11).normalize();
+                let pose = Pose::new(
+                    Vec3::new(k as f32, -3.0, 0.5),
+                    Quat::from_axis_angle(axis, k as f32 * 0.7),
+                );
+                let tight = tight_world_aabb(cm.bvh(), &pose);
+                let loose = world_aabb(&cm.bvh().root_aabb(), &pose);
+                for &v in cm.mesh().positions() {
+                    let w = pose.transform_point(v);
+                    assert!(
+                        tight.inflated(1e-4).contains_point(w),
+                        "{w} outside {tight:?}"
+                    );
+                }
+                assert!(loose.inflated(1e-4).contains_point(tight.min));
+                assert!(loose.inflated(1e-4).contains_point(tight.max));
+            }
+        }
+    }
 }
