@@ -92,90 +92,102 @@ pub fn sweep_and_prune(
             order[j] = v;
         }
     }
-    // Sweep over compact copies in sorted order (the entries are large and scattered). Each
-    // box also gets a 64-bit mask of the slabs it covers along the second axis: one AND
-    // rejects most boxes that overlap on the sweep axis only (rows of a pile).
+    // Lanes along the second axis, each swept on its own over compact copies in sorted order
+    // (the entries are large and scattered): a box is in every lane it covers, and a pair is
+    // reported in the first lane both are in. Far fewer boxes overlap along the sweep axis
+    // within a lane than in the whole world (rows of a pile).
     let second = state.second;
     let (lo, hi) = entries.iter().fold((f32::MAX, f32::MIN), |(lo, hi), e| {
         (lo.min(e.aabb.min[second]), hi.max(e.aabb.max[second]))
     });
-    let scale = 63.999 / (hi - lo).max(1e-6);
-    let slab = |v: f32| (((v - lo) * scale).clamp(0.0, 63.0)) as u32;
-    let sweep: Vec<(f32, u64)> = order
-        .iter()
-        .map(|&i| {
-            let b = &entries[i as usize].aabb;
-            let (s0, s1) = (slab(b.min[second]), slab(b.max[second]));
-            let mask = (u64::MAX >> (63 - s1)) & (u64::MAX << s0);
-            (b.min[axis], mask)
-        })
-        .collect();
-    let boxes: Vec<(Aabb, CollisionLayers)> = order
-        .iter()
-        .map(|&i| (entries[i as usize].aabb, entries[i as usize].layers))
-        .collect();
-    // Sweep in parallel over runs of the sorted order (the later boxes have fewer partners
-    // ahead of them; a few chunks per thread even that out).
-    let starts: Vec<usize> = (0..boxes.len()).collect();
-    let found = pool.map_chunks(&starts, pool.chunk_size(boxes.len(), 64), |ks| {
+    let lanes = ((entries.len() as f32).sqrt() as usize / 2).clamp(1, 32);
+    let scale = (lanes as f32 - 1e-3) / (hi - lo).max(1e-6);
+    let lane = |v: f32| (((v - lo) * scale).max(0.0) as usize).min(lanes - 1);
+    let mut members: Vec<Vec<SweepBox>> = vec![Vec::new(); lanes];
+    for &i in &order {
+        let e = &entries[i as usize];
+        let (l0, l1) = (lane(e.aabb.min[second]), lane(e.aabb.max[second]));
+        for m in &mut members[l0..=l1] {
+            m.push(SweepBox {
+                aabb: e.aabb,
+                layers: e.layers,
+                index: i,
+                first_lane: l0 as u32,
+            });
+        }
+    }
+    let lane_ids: Vec<u32> = (0..lanes as u32).collect();
+    let found = pool.map_chunks(&lane_ids, 1, |ls| {
         let mut found = Vec::new();
-        for &k in ks {
-            let (bi, li) = &boxes[k];
-            let (max, mask) = (bi.max[axis], sweep[k].1);
-            for (m, &(min, mj)) in sweep[k + 1..].iter().enumerate() {
-                if min > max {
-                    break;
-                }
-                if mask & mj == 0 {
-                    continue;
-                }
-                let (bj, lj) = &boxes[k + 1 + m];
-                if bi.intersects(bj) && li.interacts_with(lj) {
-                    let (i, j) = (order[k], order[k + 1 + m]);
-                    found.push(CandidatePair {
-                        a: i.min(j),
-                        b: i.max(j),
-                    });
+        for &l in ls {
+            let boxes = &members[l as usize];
+            for (k, bi) in boxes.iter().enumerate() {
+                let max = bi.aabb.max[axis];
+                for bj in &boxes[k + 1..] {
+                    if bj.aabb.min[axis] > max {
+                        break;
+                    }
+                    if bi.first_lane.max(bj.first_lane) == l
+                        && bi.aabb.intersects(&bj.aabb)
+                        && bi.layers.interacts_with(&bj.layers)
+                    {
+                        found.push(CandidatePair {
+                            a: bi.index.min(bj.index),
+                            b: bi.index.max(bj.index),
+                        });
+                    }
                 }
             }
         }
         found
     });
-    sort_pairs(
-        found.iter().flatten().copied(),
-        entries.len(),
-        &mut out.pairs,
-    );
+    sort_pairs(&found, entries.len(), &mut out.pairs);
     let pairs = &out.pairs;
     state.order = order.iter().map(|&i| entries[i as usize].entity).collect();
     diag.record(Stage::BroadPhase, start.elapsed(), pairs.len() as u64);
 }
 
-/// Sorts `found` into `out` by `(a, b)`: a counting sort by `a` (linear), then each run of
-/// equal `a` (a box's few partners) by `b`.
-fn sort_pairs(
-    found: impl Iterator<Item = CandidatePair> + Clone,
-    n: usize,
-    out: &mut Vec<CandidatePair>,
-) {
-    let mut starts = vec![0u32; n + 1];
-    let mut total = 0;
-    for p in found.clone() {
-        starts[p.a as usize + 1] += 1;
-        total += 1;
-    }
-    for i in 1..=n {
-        starts[i] += starts[i - 1];
-    }
+/// A box in a lane of the sweep.
+#[derive(Debug, Clone, Copy)]
+struct SweepBox {
+    aabb: Aabb,
+    layers: CollisionLayers,
+    /// Index of the entry.
+    index: u32,
+    /// The first lane the box is in (a pair is reported there).
+    first_lane: u32,
+}
+
+/// Sorts `found` (entry indices below `n`) into `out` by `(a, b)`: two counting sorts, by `b`
+/// then stably by `a` (linear; a comparison sort of thousands of pairs costs several times
+/// more).
+fn sort_pairs(found: &[Vec<CandidatePair>], n: usize, out: &mut Vec<CandidatePair>) {
+    let total: usize = found.iter().map(Vec::len).sum();
+    let mut by_b = vec![CandidatePair { a: 0, b: 0 }; total];
+    counting_sort(found.iter().flatten(), n, |p| p.b, &mut by_b);
     out.clear();
     out.resize(total, CandidatePair { a: 0, b: 0 });
-    let mut next = starts.clone();
-    for p in found {
-        out[next[p.a as usize] as usize] = p;
-        next[p.a as usize] += 1;
+    counting_sort(by_b.iter(), n, |p| p.a, out);
+}
+
+/// Stable counting sort of `items` by `key` (below `n`) into `out` (of the same length).
+fn counting_sort<'a>(
+    items: impl Iterator<Item = &'a CandidatePair> + Clone,
+    n: usize,
+    key: impl Fn(&CandidatePair) -> u32,
+    out: &mut [CandidatePair],
+) {
+    let mut next = vec![0u32; n + 1];
+    for p in items.clone() {
+        next[key(p) as usize + 1] += 1;
     }
-    for w in starts.windows(2) {
-        out[w[0] as usize..w[1] as usize].sort_unstable_by_key(|p| p.b);
+    for i in 1..=n {
+        next[i] += next[i - 1];
+    }
+    for p in items {
+        let slot = &mut next[key(p) as usize];
+        out[*slot as usize] = *p;
+        *slot += 1;
     }
 }
 

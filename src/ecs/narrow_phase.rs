@@ -289,8 +289,9 @@ pub fn narrow_phase(
     let (cut, deadline) = match config.budget {
         FrameBudget::Time(budget) => {
             let n = jobs.iter().filter(|j| j.testable()).count();
+            let target = diag.time_target(budget);
             let (count, deadline) =
-                tests_that_fit(budget, n, jobs.len(), &diag, &state.costs, Instant::now());
+                tests_that_fit(target, n, jobs.len(), &diag, &state.costs, Instant::now());
             let exact = n - jobs.iter().filter(|j| j.optional()).count();
             let cut = priority_cut(jobs, count.saturating_sub(exact), Job::optional);
             (Some(cut), Some(deadline))
@@ -477,9 +478,9 @@ fn tests_that_fit(
         .saturating_sub(reserve)
         .as_secs_f64()
         * 1e6;
-    // At least an eighth of the budget goes to tests, whatever the overhead: without tests
+    // At least a sixteenth of the budget goes to tests, whatever the overhead: without tests
     // nothing ever settles (and pairs that stopped moving cannot be cached).
-    let tests_us = (left_us - all as f64 * costs.merge_us).max(budget.as_secs_f64() * 0.125e6);
+    let tests_us = (left_us - all as f64 * costs.merge_us).max(budget.as_secs_f64() * 0.0625e6);
     let count = ((tests_us / costs.test_us.max(1e-3)) as usize).min(testable);
     (count, now + Duration::from_secs_f64(tests_us * 1e-6))
 }
@@ -893,8 +894,8 @@ mod tests {
         assert_eq!(deadline - now, Duration::from_micros(1500));
         // Never more than the testable ones.
         assert_eq!(tests_that_fit(budget, 10, 5000, &diag, &costs, now).0, 10);
-        // Overhead beyond the budget: an eighth of it still goes to tests.
+        // Overhead beyond the budget: a sixteenth of it still goes to tests.
         let (count, _) = tests_that_fit(budget, 10_000, 50_000, &diag, &costs, now);
-        assert_eq!(count, 125);
+        assert_eq!(count, 62);
     }
 }

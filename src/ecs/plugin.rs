@@ -8,7 +8,7 @@ use bevy_ecs::schedule::ScheduleLabel;
 
 use super::broad_phase::{BroadPhaseState, CandidatePairs, sweep_and_prune};
 use super::components::Fidelity;
-use super::diagnostics::{CollisionDiagnostics, begin_frame};
+use super::diagnostics::CollisionDiagnostics;
 use super::events::{
     CollisionEnded, CollisionError, CollisionStarted, Contact, ContactQueue, ReportState,
     report_collisions,
@@ -189,7 +189,6 @@ impl Plugin for StochasticCollisionPlugin {
                 s,
                 (
                     (
-                        begin_frame,
                         refit_deformables.run_if(super::prepare::any_stale),
                         gather_colliders,
                     )

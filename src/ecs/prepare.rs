@@ -9,7 +9,7 @@ use glam::{Mat3, Vec3};
 use super::components::{
     Collider, ColliderPose, CollisionLayers, Deformable, Fidelity, SelfCollision,
 };
-use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
 use super::events::{CollisionError, CollisionErrorKind};
 use super::plugin::CollisionConfig;
 use super::pool::CollisionTaskPool;
@@ -137,6 +137,7 @@ pub fn refit_deformables(
     pool: Res<CollisionTaskPool>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
+    begin_frame(&mut diag);
     let start = Instant::now();
     // Last run's entries hold clones of the meshes' `Arc`s: drop them so refits happen in place.
     frame.entries.clear();
@@ -179,6 +180,7 @@ pub fn gather_colliders(
     mut errors: MessageWriter<CollisionError>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
+    begin_frame(&mut diag);
     let start = Instant::now();
     let frame = &mut *frame;
     let state = &mut *state;
