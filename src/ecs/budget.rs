@@ -1,6 +1,6 @@
 //! Sharing the frame budget among pairs: priorities, slices, the measured work rate, seeds.
 use bevy_ecs::entity::Entity;
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 use crate::geometry::Aabb;
 
@@ -9,13 +9,21 @@ use crate::geometry::Aabb;
 ///
 /// `last_probability` is the pair's confidence in the previous run (`None`: a new pair, as
 /// uncertain as can be); `motion` the relative translation since the previous run.
+#[inline]
 pub fn pair_priority(last_probability: Option<f64>, a: &Aabb, b: &Aabb, motion: Vec3) -> f32 {
+    // In SIMD lanes (this runs for every candidate pair of every run).
+    let (amin, amax) = (Vec3A::from(a.min), Vec3A::from(a.max));
+    let (bmin, bmax) = (Vec3A::from(b.min), Vec3A::from(b.max));
     let p = last_probability.unwrap_or(0.5) as f32;
     let uncertainty = 1.0 - (2.0 * p - 1.0).abs();
-    let overlap = (a.max.min(b.max) - a.min.max(b.min)).max(Vec3::ZERO);
-    let size = a.extents().min(b.extents()).max(Vec3::splat(1e-6));
-    let closeness = (overlap / size).min(Vec3::ONE).min_element();
-    let speed = (motion.length() / size.max_element()).min(4.0);
+    let overlap = (amax.min(bmax) - amin.max(bmin)).max(Vec3A::ZERO);
+    let size = (amax - amin).min(bmax - bmin).max(Vec3A::splat(1e-6));
+    let closeness = (overlap / size).min(Vec3A::ONE).min_element();
+    let speed = if motion == Vec3::ZERO {
+        0.0
+    } else {
+        (motion.length() / size.max_element()).min(4.0)
+    };
     (0.25 + uncertainty) * (0.25 + closeness) * (1.0 + speed)
 }
 
