@@ -44,12 +44,13 @@ pub enum Method {
     /// Not tested: under a time budget, the pair was not among the most urgent that fit, or
     /// the deadline passed before its turn (exact pairs are always chosen and tested first,
     /// so only an overload of exact pairs alone cuts them). A pair that collided in the
-    /// previous run keeps that answer and contact (temporal coherence); any other pair gets
-    /// the oriented root-box test: for an exact pair, overlapping boxes count as a contact with
-    /// probability 0.5 and a box contact (level geometry must not be passed through); the
-    /// others keep "not colliding" (with the last probability). Reused contacts have depth 0
-    /// (they stop approach without pushing the same correction twice). Either way the pair
-    /// waits less in the next run.
+    /// previous run keeps that answer and contact (temporal coherence; an exact pair's contact
+    /// is re-measured on its triangle pair at the current poses, other reused contacts have
+    /// depth 0: they stop approach without pushing the same correction twice); any other pair
+    /// gets the oriented root-box test: for an exact pair, overlapping boxes count as a contact
+    /// with probability 0.5 and a box contact (level geometry must not be passed through); the
+    /// others keep "not colliding" (with the last probability). Either way the pair waits less
+    /// in the next run.
     Coherence,
 }
 
@@ -593,7 +594,7 @@ impl Context<'_> {
         let method = match job.method {
             _ if job.cached => Method::Cached,
             Method::Adb => Method::Coherence,
-            Method::Exact if m.collides => Method::Coherence,
+            // Exact pairs (re-measured contact, root-box fallback) take the full path.
             _ => return None,
         };
         let (ea, eb) = (
@@ -708,10 +709,17 @@ impl Context<'_> {
                     Some(m) if m.collides => {
                         out.collides = true;
                         out.probability = m.probability;
-                        // The old contact without its depth: it stops approach (an impulse)
-                        // but does not push the same correction twice.
-                        out.contacts
-                            .extend(m.contact.map(|c| ContactPoint { depth: 0.0, ..c }));
+                        out.contacts.extend(m.contact.map(|c| match c.triangles {
+                            // An exact pair's contact re-measured on its triangle pair at the
+                            // current poses (cheap): level geometry keeps pushing out what
+                            // sinks into it.
+                            Some(t) if job.method == Method::Exact => {
+                                triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t)
+                            }
+                            // The old contact without its depth: it stops approach (an
+                            // impulse) but does not push the same correction twice.
+                            _ => ContactPoint { depth: 0.0, ..c },
+                        }));
                     }
                     // An exact pair (level geometry, things that must not pass through each
                     // other), new or apart last time: err on the side of a contact.
