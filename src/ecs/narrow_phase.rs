@@ -1,10 +1,12 @@
 //! Narrow phase: every candidate pair tested by its fidelity, in parallel, inside the budget.
 //!
-//! Pairs are ordered by priority ([`pair_priority`]) and ADB pairs get node-pair slices of the
-//! frame budget in proportion to it ([`slices`]); an ADB traversal stops at its slice and
-//! reports its best estimate. Chunks of pairs run on the task pool, each thread with its own
-//! workspaces; results are merged in pair order (by entity), so the outcome is the same for
-//! any number of threads.
+//! Each pair gets a priority ([`pair_priority`]: last confidence, closeness, speed, waiting).
+//! Under a time budget the exact pairs and the most urgent others that fit (by the measured
+//! cost of a test) are tested and the rest answered from memory; tested ADB pairs get
+//! node-pair slices of the budget in proportion to their priority ([`slices`]), and an ADB
+//! traversal stops at its slice and reports its best estimate. Chunks of tests run on the task
+//! pool, each thread with its own workspaces; answers are merged in pair order (by entity), so
+//! the outcome is the same for any number of threads.
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 

@@ -27,11 +27,13 @@ use super::tracking_systems::{
 pub enum FrameBudget {
     /// No limit: ADB pairs run until their `p_min`/`k_min` rule settles them.
     Unlimited,
-    /// A wall-clock budget. The narrow phase converts what is left of it after Prepare and
-    /// BroadPhase into node pairs at the rate measured in earlier runs and shares them among
-    /// the ADB pairs by priority; pairs whose turn comes after the deadline keep their
-    /// previous answer ([`Method::Coherence`](super::Method::Coherence)). Results then depend
-    /// on timing: use `NodePairs` for reproducible runs.
+    /// A wall-clock budget for the collision stages (Prepare to Report). The narrow phase
+    /// measures what a test and an answer from memory cost, and what came after it in the
+    /// last run; it tests the exact pairs and then the most urgent others that fit in what is
+    /// left (aiming a little below the budget when runs overran), sharing node pairs among the
+    /// tested ADB pairs by priority. The others keep their previous answer
+    /// ([`Method::Coherence`](super::Method::Coherence)). Results then depend on timing: use
+    /// `NodePairs` for reproducible runs.
     Time(Duration),
     /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by
     /// priority. Deterministic (same results for any thread count and machine).
