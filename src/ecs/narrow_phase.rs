@@ -276,7 +276,10 @@ pub fn narrow_phase(
         last: None,
     }));
     let chunk = pool.chunk_size(jobs.len(), 256);
-    pool.for_each_chunk_mut(jobs, chunk, |c| plan_jobs(c, entries, old_keys, old_memory));
+    let run = diag.frame;
+    pool.for_each_chunk_mut(jobs, chunk, |c| {
+        plan_jobs(c, entries, old_keys, old_memory, run);
+    });
     // Tracked pairs go to the Tracking stage; the others keep their order.
     let mut adb_pairs = 0u64;
     jobs.retain(|j| {
@@ -403,12 +406,14 @@ pub fn narrow_phase(
 }
 
 /// Fills in each job of a run of candidates (in pair order): its method (`Tracking`: handed
-/// over to the Tracking stage), last answer, whether that answer still holds, and priority.
+/// over to the Tracking stage), last answer, whether that answer still holds, and priority
+/// (`run`: this run's number).
 fn plan_jobs(
     jobs: &mut [Job],
     entries: &[ColliderEntry],
     old_keys: &[(Entity, Entity)],
     old_memory: &[PairMemory],
+    run: u64,
 ) {
     let Some(first) = jobs.first() else {
         return;
@@ -457,6 +462,12 @@ fn plan_jobs(
         match memory {
             None => priority *= 4.0,
             Some(m) => priority *= (1 + m.stale.min(15)) as f32,
+        }
+        // Both stopped (unchanged since the last run) but the answer is not settled: one test
+        // now is answered from memory for as long as they rest.
+        let still = ea.still_since < run && eb.still_since < run;
+        if still && memory.is_some_and(|m| !m.settled) {
+            priority *= 4.0;
         }
         job.priority = priority;
         job.bucket = priority_bucket(priority);
