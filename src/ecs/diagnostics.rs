@@ -114,8 +114,8 @@ pub struct CollisionDiagnostics {
     narrow_end: Option<Instant>,
     /// How far below the time budget the narrow phase aims (learnt from overruns).
     margin: Duration,
-    /// A run has begun and not yet ended.
-    open: bool,
+    /// The refit system began this run (the gather system then does not begin another).
+    pub(crate) begun_by_refit: bool,
     /// Work counters.
     pub counters: CollisionCounters,
 }
@@ -130,7 +130,7 @@ impl Default for CollisionDiagnostics {
             reserve: Duration::ZERO,
             narrow_end: None,
             margin: Duration::ZERO,
-            open: false,
+            begun_by_refit: false,
             counters: CollisionCounters::default(),
         }
     }
@@ -174,14 +174,9 @@ impl CollisionDiagnostics {
     }
 }
 
-/// Starts a run, once (the first timed system of the run calls it, so that no system of its
-/// own, and no scheduling hop, is needed): counts it, resets the stages' last times to
-/// "not run".
+/// Starts a run (called by the first timed system of the run, so that no system of its own,
+/// and no scheduling hop, is needed): counts it, resets the stages' last times to "not run".
 pub(crate) fn begin_frame(diag: &mut CollisionDiagnostics) {
-    if diag.open {
-        return;
-    }
-    diag.open = true;
     diag.frame += 1;
     diag.frame_start = Instant::now();
     for r in &mut diag.stages {
@@ -192,7 +187,6 @@ pub(crate) fn begin_frame(diag: &mut CollisionDiagnostics) {
 /// Ends the collision stages of a run: the total time, overruns. Called at the end of the
 /// Report stage (not a system of its own: one scheduling hop less per run).
 pub(crate) fn end_frame(diag: &mut CollisionDiagnostics, config: &CollisionConfig) {
-    diag.open = false;
     diag.collision_time = diag.frame_start.elapsed();
     let after_stages: Duration = [Stage::SelfCollision, Stage::Tracking, Stage::Report]
         .iter()

@@ -308,7 +308,8 @@ pub fn narrow_phase(
     let exact_tested = choose_tests(jobs, cut, tested);
     // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
     let is_adb = |&&i: &&u32| jobs[i as usize].method == Method::Adb;
-    let total = node_budget(&config, deadline, start, state.rate, state.exact_node_pairs);
+    let now = Instant::now();
+    let total = node_budget(&config, deadline, now, state.rate, state.exact_node_pairs);
     if let Some(total) = total {
         let share = SliceShare::new(
             tested

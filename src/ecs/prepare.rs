@@ -137,7 +137,9 @@ pub fn refit_deformables(
     pool: Res<CollisionTaskPool>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
+    // The first system of a run when it runs (a deformable mesh has new positions).
     begin_frame(&mut diag);
+    diag.begun_by_refit = true;
     let start = Instant::now();
     // Last run's entries hold clones of the meshes' `Arc`s: drop them so refits happen in place.
     frame.entries.clear();
@@ -180,7 +182,9 @@ pub fn gather_colliders(
     mut errors: MessageWriter<CollisionError>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
-    begin_frame(&mut diag);
+    if !std::mem::take(&mut diag.begun_by_refit) {
+        begin_frame(&mut diag);
+    }
     let start = Instant::now();
     let frame = &mut *frame;
     let state = &mut *state;
