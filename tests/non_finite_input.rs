@@ -17,8 +17,8 @@ fn non_finite_poses() -> Vec<Pose> {
     let (nan, inf) = (f32::NAN, f32::INFINITY);
     vec![
         Pose::new(Vec3::ZERO, Quat::from_xyzw(0.0, 0.0, 0.0, 0.0)),
-        Pose::new(Vec3::ZERO, Quat::from_xyzw(1e20, 0.0, 0.0, 1.0)),
         Pose::new(Vec3::ZERO, Quat::from_xyzw(nan, 0.0, 0.0, 1.0)),
+        Pose::new(Vec3::ZERO, Quat::from_xyzw(inf, 0.0, 0.0, 1.0)),
         Pose::from_translation(Vec3::new(nan, 0.0, 0.0)),
         Pose::from_translation(Vec3::new(0.0, inf, 0.0)),
         Pose::from_translation(Vec3::new(0.0, 0.0, -inf)),
@@ -77,6 +77,18 @@ fn a_pose_that_is_not_finite_places_its_mesh_nowhere() {
         &Pose::IDENTITY,
         &mut ws
     ));
+    // `Pose::new` normalises huge and tiny quaternions without over- or underflow.
+    for scale in [1e20f32, 1e-30, f32::MAX, f32::MIN_POSITIVE] {
+        let q = Quat::from_xyzw(scale, 0.0, 0.0, scale);
+        let pose = Pose::new(Vec3::ZERO, q);
+        assert!(pose.is_finite(), "{scale}");
+        let expected = Quat::from_xyzw(1.0, 0.0, 0.0, 1.0).normalize();
+        assert!(
+            pose.rotation.abs_diff_eq(expected, 1e-6),
+            "{scale}: {:?}",
+            pose.rotation
+        );
+    }
     // An unnormalised rotation whose squared length overflows f32 (the fields are public) is
     // still a rotation: queries normalise it in f64.
     let big = Pose {
@@ -266,4 +278,31 @@ fn huge_f64_corners_are_decided_exactly() {
             assert!(!c.distance.is_nan(), "{b:?} scaled by 2^{e}: {c:?}");
         }
     }
+}
+
+/// Two meshes whose vertices sit near the ends of the `f32` range, at identity poses: the
+/// distance between them (about 4e38) is beyond `f32`, and is reported as `f32::MAX`, never
+/// infinite.
+#[test]
+fn a_distance_beyond_the_f32_range_saturates() {
+    use stochastic_collision::mesh::TriMesh;
+    let ball = generate::icosphere(1e30, 1);
+    let moved = |dx: f32| {
+        let p: Vec<Vec3> = ball.positions().iter().map(|&v| v + Vec3::X * dx).collect();
+        CollisionMesh::new(TriMesh::new(p, ball.triangles().to_vec()).unwrap())
+    };
+    let (left, right) = (moved(-2e38), moved(2e38));
+    let mut ws = QueryWorkspace::new();
+    let d = closest_points(
+        &left,
+        &Pose::IDENTITY,
+        &right,
+        &Pose::IDENTITY,
+        f32::INFINITY,
+        &mut ws,
+    )
+    .expect("finite poses, finite meshes");
+    assert_eq!(d.distance, f32::MAX);
+    assert!(d.point_a.is_finite() && d.point_b.is_finite());
+    assert!(d.point_a.x < -1e38 && d.point_b.x > 1e38);
 }

@@ -9,7 +9,9 @@ use crate::geometry::{Pose, closest_points_triangle_triangle};
 /// The closest points between two meshes.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MeshDistance {
-    /// Distance between the surfaces (0 when they touch or intersect).
+    /// Distance between the surfaces (0 when they touch or intersect), computed in `f64`; it
+    /// saturates at `f32::MAX` when the surfaces are farther apart than `f32` can say (never
+    /// infinite).
     pub distance: f32,
     /// Closest point on the first mesh, in world space.
     pub point_a: Vec3,
@@ -110,7 +112,7 @@ pub fn closest_points(
     }
     let (c, triangles) = found?;
     Some(MeshDistance {
-        distance: c.distance as f32,
+        distance: (c.distance as f32).min(f32::MAX),
         point_a: pose_a.transform_point(c.point_a.as_vec3()),
         point_b: pose_a.transform_point(c.point_b.as_vec3()),
         triangles,

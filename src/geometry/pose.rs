@@ -1,4 +1,4 @@
-use glam::{DQuat, DVec3, Quat, Vec3};
+use glam::{DQuat, DVec3, Quat, Vec3, Vec4};
 
 /// A rigid transform: a rotation followed by a translation (`p ↦ rotation * p + translation`).
 ///
@@ -26,13 +26,20 @@ impl Pose {
         translation: Vec3::ZERO,
     };
 
-    /// A pose from its parts. The rotation is normalised; one that cannot be (zero, NaN,
-    /// infinite, or so large that its squared length overflows `f32`) gives a pose that is not
-    /// [finite](Pose::is_finite).
+    /// A pose from its parts. The rotation is normalised, scaled first so that neither a huge
+    /// nor a tiny quaternion over- or underflows `f32` on the way; one that cannot be (zero,
+    /// NaN or infinite parts) gives a pose that is not [finite](Pose::is_finite).
     #[inline]
     pub fn new(translation: Vec3, rotation: Quat) -> Self {
+        let v = Vec4::from(rotation);
+        let largest = v.abs().max_element();
+        let rotation = if largest.is_finite() && largest > 0.0 {
+            Quat::from_vec4(v / largest).normalize()
+        } else {
+            rotation.normalize()
+        };
         Self {
-            rotation: rotation.normalize(),
+            rotation,
             translation,
         }
     }
