@@ -37,9 +37,10 @@ use super::predicates::orient3d as o3;
 /// intermediate products neither overflow nor underflow: always for corners in the `f32`
 /// range (the crate's storage), and for `f64` corners whose nonzero coordinates and nonzero
 /// coordinate differences are roughly within `[1e-60, 1e60]` in magnitude. Corners beyond
-/// about `2^300 ≈ 2e90` (where orientations could overflow) are first scaled by a power of two, which
-/// is exact, so larger finite input is decided just as exactly (short of tiny coordinates
-/// underflowing). A triangle with a NaN or infinite coordinate is no point set: the result is
+/// about `2^300 ≈ 2e90` (where orientations could overflow), or all below about `2^-200 ≈
+/// 6e-61` (where they could underflow), are first scaled by a power of two, which is exact,
+/// so larger and smaller finite input is decided just as exactly (short of coordinates far
+/// smaller than the largest one underflowing). A triangle with a NaN or infinite coordinate is no point set: the result is
 /// `false`.
 #[inline]
 pub fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
@@ -47,21 +48,26 @@ pub fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
     // (and NaN compares false): one branch on the hot path.
     let sum =
         (a[0].abs() + a[1].abs() + a[2].abs() + b[0].abs() + b[1].abs() + b[2].abs()).element_sum();
-    if sum <= MAX_DIRECT {
+    if sum <= MAX_DIRECT && (sum >= MIN_DIRECT || sum == 0.0) {
         intersect_in_range(a, b)
     } else {
         intersect_out_of_range(a, b)
     }
 }
 
+/// Smallest nonzero sum of coordinate magnitudes decided without rescaling: below it the
+/// predicates' products could underflow, so the corners are scaled up by a power of two first.
+const MIN_DIRECT: f64 = 6.223_015_277_861_142e-61; // 2^-200
+
 /// Largest sum of coordinate magnitudes decided without rescaling: coordinates are then at most
 /// `2^300` and differences `2^301`, so the orientations' products (degree 3, at most `2^906`)
 /// cannot overflow.
 const MAX_DIRECT: f64 = 2.037_035_976_334_486e90; // 2^300
 
-/// [`triangles_intersect`] for corners beyond [`MAX_DIRECT`] or not finite: `false` for a NaN
-/// or infinite corner, else the test on the corners scaled by a power of two that brings the
-/// largest coordinate to at most 1 (exact, short of underflow of far smaller coordinates).
+/// [`triangles_intersect`] for corners beyond [`MAX_DIRECT`], all below [`MIN_DIRECT`], or not
+/// finite: `false` for a NaN or infinite corner, else the test on the corners scaled by a
+/// power of two that brings the largest coordinate to between 1/2 and 1 (exact, short of
+/// underflow of coordinates far smaller than the largest).
 #[cold]
 fn intersect_out_of_range(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
     let corners = a.iter().chain(b);
@@ -69,8 +75,11 @@ fn intersect_out_of_range(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
         return false;
     }
     let m = corners.fold(0.0f64, |m, p| m.max(p.abs().max_element()));
-    let k = 2f64.powi(-(m.log2().ceil() as i32));
-    intersect_in_range(&a.map(|p| p * k), &b.map(|p| p * k))
+    let e = -(m.log2().ceil() as i32);
+    // 2^e may not be a finite f64 itself (e up to 1074 for subnormal input): two steps.
+    let (k1, k2) = (2f64.powi(e / 2), 2f64.powi(e - e / 2));
+    let scale = |p: DVec3| p * k1 * k2;
+    intersect_in_range(&a.map(scale), &b.map(scale))
 }
 
 /// The test on corners within [`MAX_DIRECT`].
@@ -483,6 +492,7 @@ mod tests {
     #[test]
     fn max_direct_is_two_to_the_300() {
         assert_eq!(MAX_DIRECT, 2f64.powi(300));
+        assert_eq!(MIN_DIRECT, 2f64.powi(-200));
     }
 
     /// Checks the answer under corner permutations, swapping and a few exact transforms.
@@ -504,6 +514,23 @@ mod tests {
                     assert_eq!(triangles_intersect(&b2, &a2), expected, "{b2:?} {a2:?}");
                     assert_eq!(intersect_slow(&a2, &b2, false), expected, "{a2:?} {b2:?}");
                     assert_eq!(intersection_point(&a2, &b2).is_some(), expected);
+                }
+                // Far below the predicates' direct range (down to subnormal corners): scaled
+                // up exactly first.
+                for e in [-150, -400, -900, -1040] {
+                    let k = 2f64.powi(e / 2) * 2f64.powi(e - e / 2);
+                    let t = |t: &[DVec3; 3], p: [usize; 3]| p.map(|i| t[i] * k);
+                    let (a2, b2) = (t(&a, pa), t(&b, pb));
+                    assert_eq!(
+                        triangles_intersect(&a2, &b2),
+                        expected,
+                        "2^{e}: {a2:?} {b2:?}"
+                    );
+                    assert_eq!(
+                        triangles_intersect(&b2, &a2),
+                        expected,
+                        "2^{e}: {b2:?} {a2:?}"
+                    );
                 }
             }
         }
