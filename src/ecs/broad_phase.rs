@@ -45,6 +45,11 @@ pub struct BroadPhaseState {
     axis: usize,
     second: usize,
     last_axis: usize,
+    /// Reused buffers (no fresh memory every run): the lanes' boxes, the pairs found per lane,
+    /// the pairs sorted by their second index.
+    lanes: Vec<Vec<SweepBox>>,
+    found: Vec<Vec<CandidatePair>>,
+    by_b: Vec<CandidatePair>,
 }
 
 /// Collects the candidate pairs of the run.
@@ -103,7 +108,9 @@ pub fn sweep_and_prune(
     let lanes = ((entries.len() as f32).sqrt() as usize / 2).clamp(1, 32);
     let scale = (lanes as f32 - 1e-3) / (hi - lo).max(1e-6);
     let lane = |v: f32| (((v - lo) * scale).max(0.0) as usize).min(lanes - 1);
-    let mut members: Vec<Vec<SweepBox>> = vec![Vec::new(); lanes];
+    let members = &mut state.lanes;
+    members.resize_with(lanes, Vec::new);
+    members.iter_mut().for_each(Vec::clear);
     for &i in &order {
         let e = &entries[i as usize];
         let (l0, l1) = (lane(e.aabb.min[second]), lane(e.aabb.max[second]));
@@ -117,8 +124,8 @@ pub fn sweep_and_prune(
         }
     }
     let lane_ids: Vec<u32> = (0..lanes as u32).collect();
-    let found = pool.map_chunks(&lane_ids, 1, |ls| {
-        let mut found = Vec::new();
+    let members = &state.lanes;
+    pool.map_chunks_into(&lane_ids, 1, &mut state.found, |ls, found| {
         for &l in ls {
             let boxes = &members[l as usize];
             for (k, bi) in boxes.iter().enumerate() {
@@ -139,9 +146,8 @@ pub fn sweep_and_prune(
                 }
             }
         }
-        found
     });
-    sort_pairs(&found, entries.len(), &mut out.pairs);
+    sort_pairs(&state.found, entries.len(), &mut state.by_b, &mut out.pairs);
     let pairs = &out.pairs;
     state.order = order.iter().map(|&i| entries[i as usize].entity).collect();
     diag.record(Stage::BroadPhase, start.elapsed(), pairs.len() as u64);
@@ -159,12 +165,18 @@ struct SweepBox {
 }
 
 /// Sorts `found` (entry indices below `n`) into `out` by `(a, b)`: two counting sorts, by `b`
-/// then stably by `a` (linear; a comparison sort of thousands of pairs costs several times
+/// (into `by_b`) then stably by `a` (linear; a comparison sort of thousands of pairs costs several times
 /// more).
-fn sort_pairs(found: &[Vec<CandidatePair>], n: usize, out: &mut Vec<CandidatePair>) {
+fn sort_pairs(
+    found: &[Vec<CandidatePair>],
+    n: usize,
+    by_b: &mut Vec<CandidatePair>,
+    out: &mut Vec<CandidatePair>,
+) {
     let total: usize = found.iter().map(Vec::len).sum();
-    let mut by_b = vec![CandidatePair { a: 0, b: 0 }; total];
-    counting_sort(found.iter().flatten(), n, |p| p.b, &mut by_b);
+    by_b.clear();
+    by_b.resize(total, CandidatePair { a: 0, b: 0 });
+    counting_sort(found.iter().flatten(), n, |p| p.b, by_b);
     out.clear();
     out.resize(total, CandidatePair { a: 0, b: 0 });
     counting_sort(by_b.iter(), n, |p| p.a, out);
