@@ -295,8 +295,7 @@ fn normalized(pose: &Pose) -> Pose {
 /// transforms per moving body.
 pub(crate) fn tight_world_aabb(bvh: &crate::bvh::Bvh, pose: &Pose) -> Aabb {
     let nodes = bvh.nodes();
-    let m = Mat3::from_quat(pose.rotation);
-    let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+    let rotation = BoxRotation::new(pose);
     let mut out = Aabb::EMPTY;
     let mut stack = [(0u32, 0u32); 2 * TIGHT_LEVELS as usize + 2];
     let mut len = 1;
@@ -305,10 +304,7 @@ pub(crate) fn tight_world_aabb(bvh: &crate::bvh::Bvh, pose: &Pose) -> Aabb {
         let (i, level) = stack[len];
         let node = &nodes[i as usize];
         if node.is_leaf() || level == TIGHT_LEVELS {
-            let local = node.aabb();
-            let center = pose.translation + m * local.center();
-            let half = abs * local.half_extents();
-            out = out.union(&Aabb::new(center - half, center + half));
+            out = out.union(&rotation.world_box(&node.aabb(), pose.translation));
         } else {
             stack[len] = (node.left(), level + 1);
             stack[len + 1] = (node.left() + 1, level + 1);
@@ -323,11 +319,28 @@ const TIGHT_LEVELS: u32 = 3;
 
 /// The world box of a local box under a rigid pose.
 pub(crate) fn world_aabb(local: &Aabb, pose: &Pose) -> Aabb {
-    let center = pose.transform_point(local.center());
-    let m = Mat3::from_quat(pose.rotation);
-    let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
-    let half = abs * local.half_extents();
-    Aabb::new(center - half, center + half)
+    BoxRotation::new(pose).world_box(local, pose.translation)
+}
+
+/// A pose's rotation as a matrix and its absolute value, for the world boxes of local boxes.
+struct BoxRotation {
+    m: Mat3,
+    abs: Mat3,
+}
+
+impl BoxRotation {
+    fn new(pose: &Pose) -> Self {
+        let m = Mat3::from_quat(pose.rotation);
+        let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+        Self { m, abs }
+    }
+
+    /// The world box of `local` rotated, then moved by `translation`.
+    fn world_box(&self, local: &Aabb, translation: Vec3) -> Aabb {
+        let center = translation + self.m * local.center();
+        let half = self.abs * local.half_extents();
+        Aabb::new(center - half, center + half)
+    }
 }
 
 #[cfg(test)]
