@@ -146,13 +146,11 @@ pub(crate) struct PairMemory {
 }
 
 /// The narrow phase's measured costs (time mode), as moving averages of wall-clock time:
-/// a test (on the pool), the serial merge per pair (answers from memory included), and the
-/// serial time after the merge.
+/// a test (on the pool) and the serial merge per pair (answers from memory included).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PairCosts {
     test_us: f64,
     merge_us: f64,
-    after: Duration,
 }
 
 impl Default for PairCosts {
@@ -160,7 +158,6 @@ impl Default for PairCosts {
         Self {
             test_us: 2.0,
             merge_us: 0.05,
-            after: Duration::ZERO,
         }
     }
 }
@@ -363,14 +360,6 @@ pub fn narrow_phase(
             } else if next_other.as_ref().is_some_and(|t| t.0 == pos) {
                 let (_, o, m) = std::mem::replace(&mut next_other, done.next()).expect("checked");
                 (o, m)
-            } else if let Some((o, m)) = ctx.remembered(pos) {
-                // The common case, kept lean: a cached or coherent answer from memory.
-                c.coherence_pairs += u64::from(o.method == Method::Coherence);
-                c.cached_pairs += u64::from(o.method == Method::Cached);
-                state.history_keys.push((o.a, o.b));
-                state.history.push(m);
-                state.outcomes.push(o);
-                continue;
             } else {
                 let (_, o, m) = ctx.answer(pos, true, &mut query, exact, adb, pairs);
                 (o, m)
@@ -400,7 +389,6 @@ pub fn narrow_phase(
     let costs = &mut state.costs;
     PairCosts::learn(&mut costs.test_us, state.tested.len(), test_time);
     PairCosts::learn(&mut costs.merge_us, jobs.len(), merge_time);
-    costs.after = merge_start.elapsed().saturating_sub(merge_time);
     let elapsed = start.elapsed();
     diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
     diag.narrow_phase_ended();
@@ -487,7 +475,7 @@ fn tests_that_fit(
     now: Instant,
 ) -> (usize, Instant) {
     let spent = now.saturating_duration_since(diag.frame_start);
-    let reserve = diag.reserve_after_narrow() + costs.after;
+    let reserve = diag.reserve_after_narrow();
     let left_us = budget
         .saturating_sub(spent)
         .saturating_sub(reserve)
@@ -598,10 +586,10 @@ impl Context<'_> {
         });
     }
 
-    /// The answer of an untested job from its memory, when it has one and is not a
-    /// bounds-only pair: [`Method::Cached`] if the memory still holds, else
-    /// [`Method::Coherence`] (an exact pair that did not collide gets [`Self::answer`]'s
-    /// root-box fallback instead: `None`).
+    /// The answer of a job from its memory, when that needs no geometry: [`Method::Cached`]
+    /// if the memory still holds, else for an ADB pair [`Method::Coherence`] (its old contact
+    /// without depth: it stops approach but does not push the same correction twice). `None`
+    /// otherwise: no memory, or an exact pair (its contact is re-measured by `run_job`).
     fn remembered(&self, pos: u32) -> Option<(PairOutcome, PairMemory)> {
         let job = &self.jobs[pos as usize];
         let m = &self.memory[job.last? as usize];
@@ -653,6 +641,11 @@ impl Context<'_> {
         pairs: &mut Vec<TrianglePair>,
     ) -> Answer {
         let job = &self.jobs[pos as usize];
+        if (job.cached || late)
+            && let Some((o, m)) = self.remembered(pos)
+        {
+            return (pos, o, m);
+        }
         let o = self.run_job(job, late, query, exact, adb, pairs);
         let (ea, eb) = (
             &self.entries[job.pair.a as usize],
@@ -665,7 +658,6 @@ impl Context<'_> {
                 stale: self.memory[i as usize].stale + 1,
                 ..self.memory[i as usize]
             },
-            (Method::Cached, Some(i)) => self.memory[i as usize],
             _ => PairMemory {
                 probability: o.probability,
                 collides: o.collides,
@@ -703,14 +695,8 @@ impl Context<'_> {
             contacts: SmallVec::new(),
         };
         let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
+        // Cached answers and ADB pairs with a memory never get here ([`Self::remembered`]).
         let last = job.last.map(|i| self.memory[i as usize]);
-        if let Some(m) = last.filter(|_| job.cached) {
-            out.method = Method::Cached;
-            out.collides = m.collides;
-            out.probability = m.probability;
-            out.contacts.extend(m.contact.filter(|_| m.collides));
-            return out;
-        }
         match job.method {
             Method::Bounds => {
                 out.collides = true;
@@ -723,16 +709,12 @@ impl Context<'_> {
                     Some(m) if m.collides => {
                         out.collides = true;
                         out.probability = m.probability;
+                        // An exact pair's contact re-measured on its triangle pair at the
+                        // current poses (cheap): level geometry keeps pushing out what sinks
+                        // into it. A box contact (no triangles) stays, without its depth.
                         out.contacts.extend(m.contact.map(|c| match c.triangles {
-                            // An exact pair's contact re-measured on its triangle pair at the
-                            // current poses (cheap): level geometry keeps pushing out what
-                            // sinks into it.
-                            Some(t) if job.method == Method::Exact => {
-                                triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t)
-                            }
-                            // The old contact without its depth: it stops approach (an
-                            // impulse) but does not push the same correction twice.
-                            _ => ContactPoint { depth: 0.0, ..c },
+                            Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
+                            None => ContactPoint { depth: 0.0, ..c },
                         }));
                     }
                     // An exact pair (level geometry, things that must not pass through each
@@ -906,7 +888,6 @@ mod tests {
         let costs = PairCosts {
             test_us: 2.0,
             merge_us: 0.1,
-            after: Duration::ZERO,
         };
         let now = diag.frame_start;
         // 2000 µs, 5000 pairs merged at 0.1 µs: 1500 µs for tests of 2 µs.

@@ -19,7 +19,6 @@ use bevy_ecs::entity::{EntityHashMap, EntityHashSet};
 use bevy_ecs::prelude::*;
 use smallvec::SmallVec;
 
-use super::broad_phase::CandidatePair;
 use super::components::{Deformable, Fidelity, SelfCollision};
 use super::contact::{ContactPoint, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
@@ -381,16 +380,8 @@ pub fn self_collision(
     outcomes.outcomes.extend(results);
 
     // Stochastic self-collision.
-    let entries: Vec<&ColliderEntry> = tracked
-        .iter()
-        .map(|&i| &frame.entries[i as usize])
-        .collect();
-    update_surfaces(&mut state, &entries, &pool);
-    let mut jobs: Vec<Job> = tracked
-        .iter()
-        .map(|&i| job(&mut state, &frame, i, i, config.seed))
-        .collect();
-    run_jobs(&mut jobs, &frame, &state, &pool, max);
+    let pairs: Vec<(u32, u32)> = tracked.iter().map(|&i| (i, i)).collect();
+    let jobs = tracked_jobs(&mut state, &frame, &pool, config.seed, &pairs, max);
     finish_jobs(
         jobs,
         &mut state,
@@ -400,6 +391,32 @@ pub fn self_collision(
         Method::SelfCollision,
     );
     diag.record(Stage::SelfCollision, start.elapsed(), meshes.len() as u64);
+}
+
+/// The tracker jobs of `pairs` (entry indices; `(i, i)` for a self-colliding mesh), run: the
+/// surfaces of the entries involved brought up to date first, at most `max` contacts each.
+fn tracked_jobs(
+    state: &mut TrackingState,
+    frame: &ColliderFrame,
+    pool: &CollisionTaskPool,
+    seed: u64,
+    pairs: &[(u32, u32)],
+    max: usize,
+) -> Vec<Job> {
+    let mut involved: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+    involved.sort_unstable();
+    involved.dedup();
+    let entries: Vec<&ColliderEntry> = involved
+        .iter()
+        .map(|&i| &frame.entries[i as usize])
+        .collect();
+    update_surfaces(state, &entries, pool);
+    let mut jobs: Vec<Job> = pairs
+        .iter()
+        .map(|&(a, b)| job(state, frame, a, b, seed))
+        .collect();
+    run_jobs(&mut jobs, frame, state, pool, max);
+    jobs
 }
 
 /// Merges finished jobs: outcomes in entity order, feature pairs recorded, trackers kept.
@@ -439,20 +456,9 @@ pub fn track_pairs(
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
     let start = Instant::now();
-    let tracked: Vec<CandidatePair> = outcomes.tracked.clone();
-    let mut involved: Vec<u32> = tracked.iter().flat_map(|p| [p.a, p.b]).collect();
-    involved.sort_unstable();
-    involved.dedup();
-    let entries: Vec<&ColliderEntry> = involved
-        .iter()
-        .map(|&i| &frame.entries[i as usize])
-        .collect();
-    update_surfaces(&mut state, &entries, &pool);
-    let mut jobs: Vec<Job> = tracked
-        .iter()
-        .map(|pair| job(&mut state, &frame, pair.a, pair.b, config.seed))
-        .collect();
-    run_jobs(&mut jobs, &frame, &state, &pool, config.max_self_contacts);
+    let pairs: Vec<(u32, u32)> = outcomes.tracked.iter().map(|p| (p.a, p.b)).collect();
+    let max = config.max_self_contacts;
+    let jobs = tracked_jobs(&mut state, &frame, &pool, config.seed, &pairs, max);
     finish_jobs(
         jobs,
         &mut state,
@@ -461,7 +467,7 @@ pub fn track_pairs(
         &mut commands,
         Method::Tracking,
     );
-    diag.record(Stage::Tracking, start.elapsed(), tracked.len() as u64);
+    diag.record(Stage::Tracking, start.elapsed(), pairs.len() as u64);
 }
 
 /// Run condition: something is being tracked (or was until now), so [`forget_untracked`]
