@@ -47,6 +47,11 @@ impl SliceShare {
     /// The share of `total` among pairs of the given priorities.
     pub fn new(priorities: impl Iterator<Item = f32>, total: u64, min: u64, max: u64) -> Self {
         let (n, sum) = priorities.fold((0u64, 0.0f64), |(n, s), p| (n + 1, s + f64::from(p)));
+        Self::from_sum(n, sum, total, min, max)
+    }
+
+    /// The share of `total` among `n` pairs whose priorities sum to `sum`.
+    pub fn from_sum(n: u64, sum: f64, total: u64, min: u64, max: u64) -> Self {
         let rest = total.saturating_sub(n * min) as f64;
         Self {
             min,
@@ -77,31 +82,28 @@ fn splitmix(mut z: u64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// What the budget learns from earlier runs (time mode): node pairs per microsecond of narrow
-/// phase wall-clock time, and the work of the exact pairs, as moving averages.
+/// What the budget learns from earlier runs (time mode): node pairs per microsecond of test
+/// wall-clock time, as a moving average.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct WorkRate {
     pub node_pairs_per_us: f64,
-    pub per_pair_overhead_us: f64,
 }
 
 impl Default for WorkRate {
     fn default() -> Self {
         Self {
             node_pairs_per_us: 20.0,
-            per_pair_overhead_us: 0.5,
         }
     }
 }
 
 impl WorkRate {
-    /// Folds in one run: `node_pairs` visited by `pairs` queries in `us` microseconds.
-    pub fn update(&mut self, node_pairs: u64, pairs: usize, us: f64) {
+    /// Folds in one run: `node_pairs` visited in `us` microseconds of tests.
+    pub fn update(&mut self, node_pairs: u64, us: f64) {
         if us <= 1.0 || node_pairs == 0 {
             return;
         }
-        let overhead = self.per_pair_overhead_us * pairs as f64;
-        let rate = node_pairs as f64 / (us - overhead).max(0.1 * us);
+        let rate = node_pairs as f64 / us;
         self.node_pairs_per_us = 0.8 * self.node_pairs_per_us + 0.2 * rate;
     }
 }

@@ -44,8 +44,9 @@ pub enum Method {
     /// sleeping bodies) and the last answer was settled, so it is reused as is.
     Cached,
     /// Not tested: under a time budget, the pair was not among the most urgent that fit, or
-    /// the deadline passed before its turn (exact pairs are always chosen and tested first,
-    /// so only an overload of exact pairs alone cuts them). A pair that collided in the
+    /// the deadline passed before its turn (exact pairs are always chosen, tested first in
+    /// their run of pairs and against a later deadline, so only an overload of exact pairs
+    /// alone cuts them). A pair that collided in the
     /// previous run keeps that answer and contact (temporal coherence; an exact pair's contact
     /// is re-measured on its triangle pair at the current poses, other reused contacts have
     /// depth 0: they stop approach without pushing the same correction twice); any other pair
@@ -80,6 +81,12 @@ pub struct PairOutcome {
 }
 
 impl PairOutcome {
+    /// A slot not written yet.
+    fn placeholder() -> Self {
+        let ends = (Entity::PLACEHOLDER, Entity::PLACEHOLDER);
+        Self::exact(ends, Method::Bounds, 0, 0.0, SmallVec::new())
+    }
+
     /// An exact answer from contacts found: colliding iff there is one.
     pub(crate) fn exact(
         (a, b): (Entity, Entity),
@@ -115,11 +122,10 @@ pub struct PairOutcomes {
     /// The previous run's (read while this run's are written; buffers swap each run).
     last_keys: Vec<(Entity, Entity)>,
     last: Vec<PairMemory>,
-    /// Reused buffers: the jobs in pair order, the positions tested, their answers.
+    /// Reused buffers: the jobs in pair order, what each run of them counted.
     jobs: Vec<Job>,
-    tested: Vec<u32>,
-    tested_done: Vec<Vec<Answer>>,
-    exact_done: Vec<Answer>,
+    plan_counts: Vec<PlanCounts>,
+    run_counts: Vec<RunCounts>,
     pub(crate) rate: WorkRate,
     pub(crate) costs: PairCosts,
     pub(crate) exact_node_pairs: f64,
@@ -133,7 +139,7 @@ impl PairOutcomes {
 }
 
 /// What a pair's last answer was.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct PairMemory {
     probability: f64,
     collides: bool,
@@ -171,9 +177,6 @@ impl PairCosts {
     }
 }
 
-/// A job's position, answer and the memory it leaves.
-type Answer = (u32, PairOutcome, PairMemory);
-
 #[derive(Debug, Clone, Copy)]
 struct Job {
     pair: CandidatePair,
@@ -182,14 +185,29 @@ struct Job {
     bucket: u8,
     /// The last answer is settled and still holds (answered from memory, no test needed).
     cached: bool,
+    /// Tested in this run ([`choose_tests`]).
+    chosen: bool,
     p_min: f64,
     priority: f32,
-    slice: u64,
     /// Index of the pair's last answer.
     last: Option<u32>,
 }
 
 impl Job {
+    /// A job not planned yet.
+    fn new(pair: CandidatePair) -> Self {
+        Self {
+            pair,
+            method: Method::Tracking,
+            bucket: 0,
+            cached: false,
+            chosen: false,
+            p_min: 1.0,
+            priority: 0.0,
+            last: None,
+        }
+    }
+
     /// Needs a test (not answered from a still valid memory, not a bounds-only pair).
     fn testable(&self) -> bool {
         !self.cached && self.method != Method::Bounds
@@ -239,6 +257,10 @@ fn priority_bucket(p: f32) -> u8 {
 /// Under a time budget, the pairs tested are the most urgent ones that fit (by the measured
 /// cost of a test); the others are answered from memory ([`Method::Coherence`]) and wait less
 /// next time. The deadline stays as a safety net for the tests themselves.
+///
+/// Two parallel passes over runs of pairs: planning (method, memory, priority; each run counts
+/// its pairs per priority bucket), then, once the pairs to test are marked, the tests and the
+/// answers from memory, each run writing its answers straight into place (pair order).
 pub fn narrow_phase(
     frame: Res<ColliderFrame>,
     candidates: Res<CandidatePairs>,
@@ -250,148 +272,259 @@ pub fn narrow_phase(
     let start = Instant::now();
     let state = &mut *state;
     let entries = &frame.entries;
-    state.outcomes.clear();
     state.tracked.clear();
     // This run's answers become the next run's memory; the last run's are read meanwhile.
     std::mem::swap(&mut state.history_keys, &mut state.last_keys);
     std::mem::swap(&mut state.history, &mut state.last);
-    state.history_keys.clear();
-    state.history.clear();
     let (old_keys, old_memory) = (&state.last_keys, &state.last);
-    // Jobs in parallel over runs of candidates (the priorities need the last answers: each
+    // Plan in parallel over runs of candidates (the priorities need the last answers: each
     // run finds its place in them once, then merge-joins).
     let jobs = &mut state.jobs;
     jobs.clear();
-    jobs.extend(candidates.pairs.iter().map(|&pair| Job {
-        pair,
-        method: Method::Tracking,
-        bucket: 0,
-        cached: false,
-        p_min: 1.0,
-        priority: 0.0,
-        slice: u64::MAX,
-        last: None,
-    }));
-    let chunk = pool.chunk_size(jobs.len(), 256);
+    jobs.extend(candidates.pairs.iter().map(|&pair| Job::new(pair)));
     let run = diag.frame;
-    pool.for_each_chunk_mut(jobs, chunk, |c| {
-        plan_jobs(c, entries, old_keys, old_memory, run);
+    let chunk = pool.chunk_size(jobs.len(), 256);
+    let plans = &mut state.plan_counts;
+    plans.clear();
+    plans.resize(jobs.len().div_ceil(chunk), PlanCounts::default());
+    let mut work: Vec<_> = jobs.chunks_mut(chunk).zip(plans.iter_mut()).collect();
+    pool.for_each_mut(&mut work, 1, |(c, counts)| {
+        **counts = plan_jobs(c, entries, old_keys, old_memory, run);
     });
+    drop(work);
+    let plan = plans.iter().fold(PlanCounts::default(), PlanCounts::add);
     // Tracked pairs go to the Tracking stage; the others keep their order.
-    let mut adb_pairs = 0u64;
-    jobs.retain(|j| {
-        if j.method == Method::Tracking {
-            state.tracked.push(j.pair);
-        }
-        adb_pairs += u64::from(j.method == Method::Adb);
-        j.method != Method::Tracking
-    });
+    if plan.tracked > 0 {
+        jobs.retain(|j| {
+            if j.method == Method::Tracking {
+                state.tracked.push(j.pair);
+            }
+            j.method != Method::Tracking
+        });
+    }
     // Which pairs are tested: all of them, or under a time budget the exact pairs (asked for:
     // level geometry, things that must not pass through each other) and the most urgent of
     // the others that fit.
-    let (cut, deadline) = match config.budget {
+    let (cut, deadlines, nodes) = match config.budget {
         FrameBudget::Time(budget) => {
-            let n = jobs.iter().filter(|j| j.testable()).count();
             let target = diag.time_target(budget);
-            let (count, deadline) =
-                tests_that_fit(target, n, jobs.len(), &diag, &state.costs, Instant::now());
-            let exact = n - jobs.iter().filter(|j| j.optional()).count();
-            let cut = priority_cut(jobs, count.saturating_sub(exact), Job::optional);
-            (Some(cut), Some(deadline))
+            let testable = plan.testable as usize;
+            let now = Instant::now();
+            let costs = &state.costs;
+            let (count, deadline) = tests_that_fit(target, testable, jobs.len(), &diag, costs, now);
+            let exact = testable - plan.optional.iter().sum::<u32>() as usize;
+            let optional = count.saturating_sub(exact);
+            // The ADB node pairs the measured rate gets done in the time for tests.
+            let tests_us = deadline.saturating_duration_since(now).as_secs_f64() * 1e6;
+            let rate = state.rate.node_pairs_per_us;
+            let nodes = (tests_us * rate - state.exact_node_pairs).max(0.0);
+            let cut = priority_cut(&plan.optional, optional);
+            // Exact pairs may also use the time the answers from memory were given.
+            let merge = Duration::from_secs_f64(jobs.len() as f64 * costs.merge_us * 1e-6);
+            let deadlines = Deadlines::at(deadline, deadline + merge);
+            (Some(cut), deadlines, Some(nodes as u64))
         }
-        _ => (None, None),
+        FrameBudget::NodePairs(n) => (None, Deadlines::default(), Some(n)),
+        FrameBudget::Unlimited => (None, Deadlines::default(), None),
     };
-    let tested = &mut state.tested;
-    let exact_tested = choose_tests(jobs, cut, tested);
+    let chosen = choose_tests(jobs, cut);
     // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
-    let is_adb = |&&i: &&u32| jobs[i as usize].method == Method::Adb;
-    let now = Instant::now();
-    let total = node_budget(&config, deadline, now, state.rate, state.exact_node_pairs);
-    if let Some(total) = total {
-        let share = SliceShare::new(
-            tested
-                .iter()
-                .filter(is_adb)
-                .map(|&i| jobs[i as usize].priority),
+    // In time mode the tests were chosen by what a test costs, so each gets enough to settle
+    // (an eighth of the largest slice at least): a test cut short is wasted, tested again
+    // next run and never answered from memory; the deadline still bounds the whole.
+    let min_slice = match config.budget {
+        FrameBudget::Time(_) => config.min_slice.max(config.max_slice / 8),
+        _ => config.min_slice,
+    };
+    let share = nodes.map(|total| {
+        SliceShare::from_sum(
+            chosen.adb,
+            chosen.adb_priority,
             total,
-            config.min_slice,
+            min_slice,
             config.max_slice,
-        );
-        for &i in tested.iter() {
-            let j = &mut jobs[i as usize];
-            if j.method == Method::Adb {
-                j.slice = share.slice(j.priority);
-            }
-        }
-    }
+        )
+    });
     let ctx = Context {
         entries,
-        jobs,
         memory: old_memory,
         config: &config,
-        run: diag.frame,
+        run,
+        share,
+        deadlines,
+        node_pairs_per_us: state.rate.node_pairs_per_us,
     };
-    // The tests in parallel (the deadline is a safety net).
+    // Tests and answers from memory in parallel, each run of pairs writing its own slots.
+    let n = jobs.len();
+    let outcomes = &mut state.outcomes;
+    outcomes.truncate(n);
+    outcomes.resize(n, PairOutcome::placeholder());
+    let keys = &mut state.history_keys;
+    keys.resize(n, (Entity::PLACEHOLDER, Entity::PLACEHOLDER));
+    let memory = &mut state.history;
+    memory.resize(n, PairMemory::default());
+    let chunk = pool.chunk_size(n, 64);
+    let counts = &mut state.run_counts;
+    counts.clear();
+    counts.resize(n.div_ceil(chunk), RunCounts::default());
+    let mut work: Vec<_> = jobs
+        .chunks(chunk)
+        .zip(outcomes.chunks_mut(chunk))
+        .zip(keys.chunks_mut(chunk).zip(memory.chunks_mut(chunk)))
+        .zip(counts.iter_mut())
+        .map(|(((jobs, outcomes), (keys, memory)), counts)| ChunkWork {
+            jobs,
+            outcomes,
+            keys,
+            memory,
+            counts,
+        })
+        .collect();
     let run_start = Instant::now();
-    let chunk = pool.chunk_size(tested.len(), 8);
-    let tested_done = &mut state.tested_done;
-    pool.map_chunks_into(tested, chunk, tested_done, |c, out| {
-        ctx.run_chunk(c, deadline, out);
-    });
-    let test_time = run_start.elapsed();
-    // In pair order (by entity), whatever the thread count: the exact and the other test
-    // answers (each already in pair order), and the rest answered from memory on the way.
-    let merge_start = Instant::now();
-    let mut done = tested_done.iter_mut().flat_map(|v| v.drain(..));
-    let exact_done = &mut state.exact_done;
-    exact_done.clear();
-    exact_done.extend(done.by_ref().take(exact_tested));
-    let mut exact_iter = exact_done.drain(..);
-    let (mut next_exact, mut next_other) = (exact_iter.next(), done.next());
+    pool.for_each_mut(&mut work, 1, |w| ctx.run_chunk(w));
+    let wall = run_start.elapsed();
+    drop(work);
+    let total = counts.iter().fold(RunCounts::default(), RunCounts::add);
+    // Wall-clock costs: the threads' times over the parallelism the section had.
+    let busy = total.test_time + total.memory_time;
+    let parallel =
+        (busy.as_secs_f64() / wall.as_secs_f64().max(1e-9)).clamp(1.0, pool.threads() as f64);
+    let test_time = total.test_time.div_f64(parallel);
+    let memory_time = total.memory_time.div_f64(parallel);
     let c = &mut diag.counters;
-    let (mut np, mut exact_np) = (0, 0);
-    with_workspaces(|exact, adb, pairs| {
-        let mut query = ctx.query();
-        for pos in 0..jobs.len() as u32 {
-            let (o, m) = if next_exact.as_ref().is_some_and(|t| t.0 == pos) {
-                let (_, o, m) =
-                    std::mem::replace(&mut next_exact, exact_iter.next()).expect("checked");
-                (o, m)
-            } else if next_other.as_ref().is_some_and(|t| t.0 == pos) {
-                let (_, o, m) = std::mem::replace(&mut next_other, done.next()).expect("checked");
-                (o, m)
-            } else {
-                let (_, o, m) = ctx.answer(pos, true, &mut query, exact, adb, pairs);
-                (o, m)
-            };
-            np += o.node_pairs;
-            if o.method == Method::Exact {
-                exact_np += o.node_pairs;
-                c.exact_pairs += 1;
-            }
-            c.budget_exhausted_pairs += u64::from(o.budget_exhausted);
-            c.coherence_pairs += u64::from(o.method == Method::Coherence);
-            c.cached_pairs += u64::from(o.method == Method::Cached);
-            c.tested_pairs += u64::from(matches!(o.method, Method::Adb | Method::Exact));
-            state.history_keys.push((o.a, o.b));
-            state.history.push(m);
-            state.outcomes.push(o);
-        }
-    });
-    let merge_time = merge_start.elapsed();
-    c.node_pairs += np;
-    c.adb_pairs += adb_pairs;
+    c.node_pairs += total.node_pairs;
+    c.adb_pairs += u64::from(plan.adb);
+    c.exact_pairs += total.exact_pairs;
+    c.budget_exhausted_pairs += total.budget_exhausted;
+    c.coherence_pairs += total.coherence;
+    c.cached_pairs += total.cached;
+    c.tested_pairs += total.tested;
     c.test_time += test_time;
     state
         .rate
-        .update(np, state.tested.len(), test_time.as_secs_f64() * 1e6);
-    state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * exact_np as f64;
+        .update(total.node_pairs, test_time.as_secs_f64() * 1e6);
+    state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * total.exact_node_pairs as f64;
     let costs = &mut state.costs;
-    PairCosts::learn(&mut costs.test_us, state.tested.len(), test_time);
-    PairCosts::learn(&mut costs.merge_us, jobs.len(), merge_time);
-    let elapsed = start.elapsed();
-    diag.record(Stage::NarrowPhase, elapsed, state.outcomes.len() as u64);
+    PairCosts::learn(&mut costs.test_us, total.tested as usize, test_time);
+    PairCosts::learn(&mut costs.merge_us, n, memory_time);
+    diag.record(Stage::NarrowPhase, start.elapsed(), n as u64);
     diag.narrow_phase_ended();
+}
+
+/// What a run of jobs counted while planning.
+#[derive(Debug, Clone, Copy, Default)]
+struct PlanCounts {
+    /// Optional jobs (tested if the budget allows) per priority bucket.
+    optional: [u32; BUCKETS],
+    /// Jobs that need a test (optional and exact).
+    testable: u32,
+    /// Jobs handed over to the Tracking stage.
+    tracked: u32,
+    /// ADB jobs.
+    adb: u32,
+}
+
+impl PlanCounts {
+    fn add(mut self, other: &Self) -> Self {
+        for (a, b) in self.optional.iter_mut().zip(&other.optional) {
+            *a += b;
+        }
+        self.testable += other.testable;
+        self.tracked += other.tracked;
+        self.adb += other.adb;
+        self
+    }
+
+    fn count(jobs: &[Job]) -> Self {
+        let mut counts = Self::default();
+        for j in jobs {
+            if j.optional() {
+                counts.optional[usize::from(j.bucket)] += 1;
+            }
+            counts.testable += u32::from(j.testable());
+            counts.tracked += u32::from(j.method == Method::Tracking);
+            counts.adb += u32::from(j.method == Method::Adb);
+        }
+        counts
+    }
+}
+
+/// What a run of jobs did: its answers by kind, its work, and the time its thread spent in
+/// tests and in answers from memory.
+#[derive(Debug, Clone, Copy, Default)]
+struct RunCounts {
+    node_pairs: u64,
+    exact_node_pairs: u64,
+    exact_pairs: u64,
+    budget_exhausted: u64,
+    coherence: u64,
+    cached: u64,
+    tested: u64,
+    test_time: Duration,
+    memory_time: Duration,
+}
+
+impl RunCounts {
+    fn add(self, o: &Self) -> Self {
+        Self {
+            node_pairs: self.node_pairs + o.node_pairs,
+            exact_node_pairs: self.exact_node_pairs + o.exact_node_pairs,
+            exact_pairs: self.exact_pairs + o.exact_pairs,
+            budget_exhausted: self.budget_exhausted + o.budget_exhausted,
+            coherence: self.coherence + o.coherence,
+            cached: self.cached + o.cached,
+            tested: self.tested + o.tested,
+            test_time: self.test_time + o.test_time,
+            memory_time: self.memory_time + o.memory_time,
+        }
+    }
+
+    fn count(&mut self, o: &PairOutcome) {
+        self.node_pairs += o.node_pairs;
+        if o.method == Method::Exact {
+            self.exact_node_pairs += o.node_pairs;
+            self.exact_pairs += 1;
+        }
+        self.budget_exhausted += u64::from(o.budget_exhausted);
+        self.coherence += u64::from(o.method == Method::Coherence);
+        self.cached += u64::from(o.method == Method::Cached);
+        self.tested += u64::from(matches!(o.method, Method::Adb | Method::Exact));
+    }
+}
+
+/// One run of jobs and the slots its answers go to.
+struct ChunkWork<'a> {
+    jobs: &'a [Job],
+    outcomes: &'a mut [PairOutcome],
+    keys: &'a mut [(Entity, Entity)],
+    memory: &'a mut [PairMemory],
+    counts: &'a mut RunCounts,
+}
+
+/// When the tests of a run stop (`None`: never): the optional ones, and the exact ones (later:
+/// they were asked for, so only an overload of exact pairs alone cuts them).
+#[derive(Debug, Clone, Copy, Default)]
+struct Deadlines {
+    others: Option<Instant>,
+    exact: Option<Instant>,
+}
+
+impl Deadlines {
+    fn at(others: Instant, exact: Instant) -> Self {
+        Self {
+            others: Some(others),
+            exact: Some(exact),
+        }
+    }
+}
+
+/// What [`choose_tests`] chose: how many, and the ADB ones' count and summed priority (for
+/// their node-pair slices).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct Chosen {
+    count: usize,
+    adb: u64,
+    adb_priority: f64,
 }
 
 /// Fills in each job of a run of candidates (in pair order): its method (`Tracking`: handed
@@ -403,9 +536,9 @@ fn plan_jobs(
     old_keys: &[(Entity, Entity)],
     old_memory: &[PairMemory],
     run: u64,
-) {
+) -> PlanCounts {
     let Some(first) = jobs.first() else {
-        return;
+        return PlanCounts::default();
     };
     let key_of = |j: &Job| {
         (
@@ -414,7 +547,7 @@ fn plan_jobs(
         )
     };
     let mut cursor = old_keys.partition_point(|k| *k < key_of(first));
-    for job in jobs {
+    for job in jobs.iter_mut() {
         let (ea, eb) = (&entries[job.pair.a as usize], &entries[job.pair.b as usize]);
         (job.method, job.p_min) = match ea.fidelity.combine(eb.fidelity) {
             Fidelity::Tracking { .. } => continue,
@@ -461,6 +594,7 @@ fn plan_jobs(
         job.priority = priority;
         job.bucket = priority_bucket(priority);
     }
+    PlanCounts::count(jobs)
 }
 
 /// How many pairs can be tested in what is left of the time budget, by the measured costs,
@@ -488,42 +622,40 @@ fn tests_that_fit(
     (count, now + Duration::from_secs_f64(tests_us * 1e-6))
 }
 
-/// The positions of the jobs to test, into `tested`: every testable exact job first (a
-/// deadline then cuts the others first), then the optional ones above the `cut` (all of them
-/// without a cut), each part in pair order. Returns the number of exact ones.
-fn choose_tests(jobs: &[Job], cut: Option<(u8, usize)>, tested: &mut Vec<u32>) -> usize {
-    tested.clear();
-    let exact = |j: &Job| j.testable() && j.method == Method::Exact;
-    tested.extend((0..jobs.len() as u32).filter(|&i| exact(&jobs[i as usize])));
-    let exact_tested = tested.len();
+/// Marks the jobs tested in this run: every testable exact job, and the optional ones above
+/// the `cut` (all of them without a cut; within the cut's bucket the first in pair order).
+fn choose_tests(jobs: &mut [Job], cut: Option<(u8, usize)>) -> Chosen {
+    let mut chosen = Chosen::default();
     let mut taken_at_cut = 0;
-    for (pos, j) in jobs.iter().enumerate() {
-        let test = j.optional()
-            && match cut {
-                None => true,
-                Some((bucket, _)) if j.bucket < bucket => true,
-                Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
-                    taken_at_cut += 1;
-                    true
-                }
-                Some(_) => false,
-            };
-        if test {
-            tested.push(pos as u32);
+    for j in jobs.iter_mut() {
+        j.chosen = j.testable()
+            && (j.method == Method::Exact
+                || match cut {
+                    None => true,
+                    Some((bucket, _)) if j.bucket < bucket => true,
+                    Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
+                        taken_at_cut += 1;
+                        true
+                    }
+                    Some(_) => false,
+                });
+        if j.chosen {
+            chosen.count += 1;
+            if j.method == Method::Adb {
+                chosen.adb += 1;
+                chosen.adb_priority += f64::from(j.priority);
+            }
         }
     }
-    exact_tested
+    chosen
 }
 
-/// The priority bucket at which `count` of the jobs `eligible` are reached (from the most
-/// urgent), and how many of that bucket fit.
-fn priority_cut(jobs: &[Job], count: usize, eligible: fn(&Job) -> bool) -> (u8, usize) {
-    let mut per_bucket = [0usize; BUCKETS];
-    for j in jobs.iter().filter(|j| eligible(j)) {
-        per_bucket[usize::from(j.bucket)] += 1;
-    }
+/// The priority bucket at which `count` of the jobs counted `per_bucket` are reached (from
+/// the most urgent), and how many of that bucket fit.
+fn priority_cut(per_bucket: &[u32; BUCKETS], count: usize) -> (u8, usize) {
     let mut before = 0;
     for (b, &n) in per_bucket.iter().enumerate() {
+        let n = n as usize;
         if before + n >= count {
             return (b as u8, count - before);
         }
@@ -532,33 +664,27 @@ fn priority_cut(jobs: &[Job], count: usize, eligible: fn(&Job) -> bool) -> (u8, 
     (BUCKETS as u8, 0)
 }
 
-/// The ADB node pairs of this run (`None`: unlimited): the configured number, or in time mode
-/// what the measured rate gets done before the deadline.
-fn node_budget(
-    config: &CollisionConfig,
-    deadline: Option<Instant>,
-    now: Instant,
-    rate: WorkRate,
-    exact_node_pairs: f64,
-) -> Option<u64> {
-    match config.budget {
-        FrameBudget::Unlimited => None,
-        FrameBudget::NodePairs(n) => Some(n),
-        FrameBudget::Time(_) => {
-            let left = deadline.map_or(Duration::ZERO, |d| d.saturating_duration_since(now));
-            let work = left.as_secs_f64() * 1e6 * rate.node_pairs_per_us;
-            Some((work - exact_node_pairs).max(0.0) as u64)
-        }
-    }
+/// One thread's scratch for the tests of a run: the query settings, the workspaces, and the
+/// most node pairs the next ADB test may visit (what is left of the time for tests).
+struct Scratch<'w> {
+    query: AdbQuery,
+    exact: &'w mut QueryWorkspace,
+    adb: &'w mut AdbWorkspace,
+    pairs: &'w mut Vec<TrianglePair>,
+    node_cap: u64,
 }
 
 struct Context<'a> {
     entries: &'a [ColliderEntry],
-    jobs: &'a [Job],
     memory: &'a [PairMemory],
     config: &'a CollisionConfig,
     /// This run's number.
     run: u64,
+    /// The share of the node-pair budget among the tested ADB pairs (`None`: unlimited).
+    share: Option<SliceShare>,
+    deadlines: Deadlines,
+    /// The measured rate of the tests (time mode), for the cap of each test.
+    node_pairs_per_us: f64,
 }
 
 impl Context<'_> {
@@ -571,27 +697,63 @@ impl Context<'_> {
         }
     }
 
-    /// Runs the jobs at `positions`; past `deadline` (read every 8 pairs) pairs are answered
-    /// from memory.
-    fn run_chunk(&self, positions: &[u32], deadline: Option<Instant>, out: &mut Vec<Answer>) {
-        let mut query = self.query();
-        let mut late = false;
+    /// Answers a run of jobs into its slots: first the chosen exact ones are tested, then in
+    /// pair order the other chosen ones are tested and the rest answered from memory. Past a
+    /// deadline, chosen jobs are answered from memory too.
+    fn run_chunk(&self, w: &mut ChunkWork) {
+        let start = Instant::now();
+        let mut counts = RunCounts::default();
         with_workspaces(|exact, adb, pairs| {
-            out.extend(positions.iter().enumerate().map(|(k, &pos)| {
-                if k % 8 == 0 && !late {
-                    late = deadline.is_some_and(|d| Instant::now() > d);
-                }
-                self.answer(pos, late, &mut query, exact, adb, pairs)
-            }));
+            let s = &mut Scratch {
+                query: self.query(),
+                exact,
+                adb,
+                pairs,
+                node_cap: u64::MAX,
+            };
+            let mut put = |i: usize, (o, m): (PairOutcome, PairMemory), counts: &mut RunCounts| {
+                counts.count(&o);
+                w.keys[i] = (o.a, o.b);
+                w.memory[i] = m;
+                w.outcomes[i] = o;
+            };
+            let is_exact = |j: &Job| j.chosen && j.method == Method::Exact;
+            let mut late = false;
+            for (i, job) in w.jobs.iter().enumerate().filter(|(_, j)| is_exact(j)) {
+                late = late || self.deadlines.exact.is_some_and(|d| Instant::now() > d);
+                let answer = self.answer(job, late, s);
+                put(i, answer, &mut counts);
+            }
+            counts.test_time = start.elapsed();
+            let mut late = false;
+            for (i, job) in w.jobs.iter().enumerate().filter(|(_, j)| !is_exact(j)) {
+                let answer = if job.chosen {
+                    let t = Instant::now();
+                    if let Some(d) = self.deadlines.others {
+                        // No test runs far past the deadline: an ADB test visits at most
+                        // the node pairs the measured rate gets done before it.
+                        let left_us = d.saturating_duration_since(t).as_secs_f64() * 1e6;
+                        late = late || left_us <= 0.0;
+                        s.node_cap = (left_us * self.node_pairs_per_us) as u64;
+                    }
+                    let answer = self.answer(job, late, s);
+                    counts.test_time += t.elapsed();
+                    answer
+                } else {
+                    self.answer(job, true, s)
+                };
+                put(i, answer, &mut counts);
+            }
         });
+        counts.memory_time = start.elapsed().saturating_sub(counts.test_time);
+        *w.counts = counts;
     }
 
     /// The answer of a job from its memory, when that needs no geometry: [`Method::Cached`]
     /// if the memory still holds, else for an ADB pair [`Method::Coherence`] (its old contact
     /// without depth: it stops approach but does not push the same correction twice). `None`
     /// otherwise: no memory, or an exact pair (its contact is re-measured by `run_job`).
-    fn remembered(&self, pos: u32) -> Option<(PairOutcome, PairMemory)> {
-        let job = &self.jobs[pos as usize];
+    fn remembered(&self, job: &Job) -> Option<(PairOutcome, PairMemory)> {
         let m = &self.memory[job.last? as usize];
         let method = match job.method {
             _ if job.cached => Method::Cached,
@@ -630,23 +792,14 @@ impl Context<'_> {
         Some((outcome, memory))
     }
 
-    /// The answer of the job at `pos` (from memory when `late`) and the memory it leaves.
-    fn answer(
-        &self,
-        pos: u32,
-        late: bool,
-        query: &mut AdbQuery,
-        exact: &mut QueryWorkspace,
-        adb: &mut AdbWorkspace,
-        pairs: &mut Vec<TrianglePair>,
-    ) -> Answer {
-        let job = &self.jobs[pos as usize];
+    /// The answer of a job (from memory when `late`) and the memory it leaves.
+    fn answer(&self, job: &Job, late: bool, s: &mut Scratch) -> (PairOutcome, PairMemory) {
         if (job.cached || late)
-            && let Some((o, m)) = self.remembered(pos)
+            && let Some(answer) = self.remembered(job)
         {
-            return (pos, o, m);
+            return answer;
         }
-        let o = self.run_job(job, late, query, exact, adb, pairs);
+        let o = self.run_job(job, late, s);
         let (ea, eb) = (
             &self.entries[job.pair.a as usize],
             &self.entries[job.pair.b as usize],
@@ -667,18 +820,10 @@ impl Context<'_> {
                 contact: o.contacts.first().copied(),
             },
         };
-        (pos, o, memory)
+        (o, memory)
     }
 
-    fn run_job(
-        &self,
-        job: &Job,
-        late: bool,
-        query: &mut AdbQuery,
-        exact: &mut QueryWorkspace,
-        adb: &mut AdbWorkspace,
-        pairs: &mut Vec<TrianglePair>,
-    ) -> PairOutcome {
+    fn run_job(&self, job: &Job, late: bool, s: &mut Scratch) -> PairOutcome {
         let (ea, eb) = (
             &self.entries[job.pair.a as usize],
             &self.entries[job.pair.b as usize],
@@ -734,7 +879,7 @@ impl Context<'_> {
             }
             Method::Exact if both_rigid(ea, eb) => {
                 // First hit only (stops early): one contact, as for ADB pairs.
-                let hit = intersects_with(ma, &ea.pose, mb, &eb.pose, &Default::default(), exact);
+                let hit = intersects_with(ma, &ea.pose, mb, &eb.pose, &Default::default(), s.exact);
                 let contacts = hit
                     .witness
                     .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
@@ -744,12 +889,12 @@ impl Context<'_> {
                 return PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts);
             }
             Method::Exact => {
-                pairs.clear();
-                intersecting_pairs(ma, &ea.pose, mb, &eb.pose, exact, pairs);
-                let contacts = spread(pairs, self.config.max_contacts_per_pair)
+                s.pairs.clear();
+                intersecting_pairs(ma, &ea.pose, mb, &eb.pose, s.exact, s.pairs);
+                let contacts = spread(s.pairs, self.config.max_contacts_per_pair)
                     .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
                     .collect();
-                let (ends, nodes) = ((ea.entity, eb.entity), exact.node_pairs_visited());
+                let (ends, nodes) = ((ea.entity, eb.entity), s.exact.node_pairs_visited());
                 return PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts);
             }
             Method::Adb => {
@@ -757,12 +902,15 @@ impl Context<'_> {
                     ea.geometry.adb().expect("ADB pairs are rigid"),
                     eb.geometry.adb().expect("ADB pairs are rigid"),
                 );
-                query.p_min = job.p_min;
-                query.budget = match job.slice {
-                    u64::MAX => Budget::Unlimited,
-                    s => Budget::NodePairs(s),
+                s.query.p_min = job.p_min;
+                s.query.budget = match self.share {
+                    None => Budget::Unlimited,
+                    Some(share) => {
+                        let cap = s.node_cap.max(self.config.min_slice);
+                        Budget::NodePairs(share.slice(job.priority).min(cap))
+                    }
                 };
-                let r = adb_intersects(ta, &ea.pose, tb, &eb.pose, query, adb);
+                let r = adb_intersects(ta, &ea.pose, tb, &eb.pose, &s.query, s.adb);
                 out.node_pairs = r.node_pairs_visited;
                 out.collides = r.collides;
                 out.probability = r.probability;
@@ -828,15 +976,16 @@ mod tests {
 
     fn job(method: Method, priority: f32, cached: bool) -> Job {
         Job {
-            pair: CandidatePair { a: 0, b: 1 },
             method,
             bucket: priority_bucket(priority),
             cached,
-            p_min: 1.0,
             priority,
-            slice: u64::MAX,
-            last: None,
+            ..Job::new(CandidatePair { a: 0, b: 1 })
         }
+    }
+
+    fn chosen(jobs: &[Job]) -> Vec<usize> {
+        (0..jobs.len()).filter(|&i| jobs[i].chosen).collect()
     }
 
     #[test]
@@ -857,8 +1006,8 @@ mod tests {
     }
 
     #[test]
-    fn exact_jobs_come_first_then_the_most_urgent_that_fit() {
-        let jobs = [
+    fn exact_jobs_are_always_chosen_then_the_most_urgent_that_fit() {
+        let mut jobs = [
             job(Method::Adb, 0.5, false),
             job(Method::Exact, 0.1, false),
             job(Method::Adb, 8.0, false),
@@ -868,18 +1017,26 @@ mod tests {
             job(Method::Exact, 0.1, true),
             job(Method::Adb, 2.0, false),
         ];
-        let mut tested = Vec::new();
+        let plan = PlanCounts::count(&jobs);
+        assert_eq!(plan.testable, 5);
+        assert_eq!(plan.optional.iter().sum::<u32>(), 4);
+        assert_eq!(plan.adb, 5);
         // Two optional tests fit: the 8.0 job and the first 2.0 job (pair order in a bucket).
-        let cut = priority_cut(&jobs, 2, Job::optional);
-        assert_eq!(choose_tests(&jobs, Some(cut), &mut tested), 1);
-        assert_eq!(tested, vec![1, 2, 5]);
-        // No cut (work budgets): every testable job, exact first.
-        assert_eq!(choose_tests(&jobs, None, &mut tested), 1);
-        assert_eq!(tested, vec![1, 0, 2, 5, 7]);
+        let cut = priority_cut(&plan.optional, 2);
+        let c = choose_tests(&mut jobs, Some(cut));
+        assert_eq!(chosen(&jobs), vec![1, 2, 5]);
+        assert_eq!((c.count, c.adb, c.adb_priority), (3, 2, 10.0));
+        // No cut (work budgets): every testable job.
+        assert_eq!(choose_tests(&mut jobs, None).count, 5);
+        assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
         // Nothing fits: the exact job still.
-        let cut = priority_cut(&jobs, 0, Job::optional);
-        choose_tests(&jobs, Some(cut), &mut tested);
-        assert_eq!(tested, vec![1]);
+        let cut = priority_cut(&plan.optional, 0);
+        choose_tests(&mut jobs, Some(cut));
+        assert_eq!(chosen(&jobs), vec![1]);
+        // More than there are: all of them.
+        let cut = priority_cut(&plan.optional, 100);
+        choose_tests(&mut jobs, Some(cut));
+        assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
     }
 
     #[test]

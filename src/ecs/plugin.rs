@@ -53,7 +53,10 @@ pub struct CollisionConfig {
     /// certain collision whose contact comes from the triangle pair (a good normal and depth);
     /// without, contacts come from the most probable node pair.
     pub adb_exact_leaves: bool,
-    /// Node pairs every ADB pair gets whatever the budget (the root pair is always expanded).
+    /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
+    /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
+    /// (the pairs tested were chosen by what a test costs; one cut short would be wasted),
+    /// less only when the tests' deadline is that close.
     pub min_slice: u64,
     /// Node pairs an ADB pair gets at most, however generous the budget.
     pub max_slice: u64,
