@@ -363,7 +363,9 @@ pub fn narrow_phase(
     keys.resize(n, (Entity::PLACEHOLDER, Entity::PLACEHOLDER));
     let memory = &mut state.history;
     memory.resize(n, PairMemory::default());
-    let chunk = pool.chunk_size(n, 64);
+    // Runs of at least 64 pairs, or fewer when most of them are tested (8 tests a run).
+    let tested_share = chosen.count.max(1) as f64 / n.max(1) as f64;
+    let chunk = pool.chunk_size(n, ((8.0 / tested_share) as usize).clamp(8, 64));
     let counts = &mut state.run_counts;
     counts.clear();
     counts.resize(n.div_ceil(chunk), RunCounts::default());
