@@ -152,6 +152,10 @@ pub struct ContactQueue {
     pub consumed_total: u64,
     /// Waiting contacts replaced by a newer contact of the same pair.
     pub superseded_total: u64,
+    /// Reused buffers: the pairs of the fresh contacts, the sort keys, the sorted queue.
+    fresh_pairs: Vec<(Entity, Entity)>,
+    keys: Vec<(f32, u32)>,
+    sorted: Vec<Contact>,
 }
 
 impl ContactQueue {
@@ -211,23 +215,33 @@ impl ContactQueue {
         if !self.enabled {
             return;
         }
-        let mut fresh_pairs: Vec<(Entity, Entity)> = fresh.iter().map(|c| (c.a, c.b)).collect();
-        fresh_pairs.dedup();
         let before = self.queue.len();
         self.deferred_total += before as u64;
-        self.queue
-            .retain(|c| fresh_pairs.binary_search(&(c.a, c.b)).is_err());
-        self.superseded_total += (before - self.queue.len()) as u64;
-        self.queue.append(fresh);
-        // Sorted by small keys, then moved once (contacts are large). Stable: ties keep their
-        // order (waiting contacts first, then the fresh ones in pair order), the same for any
-        // thread count.
-        let mut keys: Vec<(f32, u32)> = (self.queue.iter().enumerate())
-            .map(|(i, c)| (c.priority, i as u32))
-            .collect();
-        keys.sort_by(|x, y| y.0.total_cmp(&x.0));
-        fresh.extend(keys.iter().map(|&(_, i)| self.queue[i as usize]));
-        std::mem::swap(&mut self.queue, fresh);
+        if before > 0 {
+            let fresh_pairs = &mut self.fresh_pairs;
+            fresh_pairs.clear();
+            fresh_pairs.extend(fresh.iter().map(|c| (c.a, c.b)));
+            fresh_pairs.dedup();
+            self.queue
+                .retain(|c| fresh_pairs.binary_search(&(c.a, c.b)).is_err());
+            self.superseded_total += (before - self.queue.len()) as u64;
+        }
+        // Sorted by small keys, then moved once (contacts are large): by priority, ties in
+        // queue order (waiting contacts first, then the fresh ones in pair order), the same
+        // for any thread count. Keys are unique (the index), so an unstable sort is exact.
+        let keys = &mut self.keys;
+        keys.clear();
+        let all = self.queue.iter().chain(fresh.iter());
+        keys.extend(all.enumerate().map(|(i, c)| (c.priority, i as u32)));
+        keys.sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then(x.1.cmp(&y.1)));
+        let waiting = self.queue.len();
+        let sorted = &mut self.sorted;
+        sorted.clear();
+        sorted.extend(keys.iter().map(|&(_, i)| match (i as usize).checked_sub(waiting) {
+            None => self.queue[i as usize],
+            Some(f) => fresh[f],
+        }));
+        std::mem::swap(&mut self.queue, sorted);
         fresh.clear();
     }
 }
