@@ -175,6 +175,8 @@ impl AdbWorkspace {
 #[derive(Debug, Clone, Copy)]
 struct Entry {
     p: f64,
+    /// `ln(1 − p)`, kept to take it out of the frontier's sum when the pair is expanded.
+    log_miss: f64,
     a: u32,
     b: u32,
 }
@@ -300,7 +302,12 @@ pub fn adb_intersects(
     };
     let mut pops = 0u32;
     ws.heap.clear();
-    ws.heap.push(Entry { p: 1.0, a: 0, b: 0 });
+    ws.heap.push(Entry {
+        p: 1.0,
+        log_miss: 0.0,
+        a: 0,
+        b: 0,
+    });
     // Leaf pairs are tested exactly in exact-leaves mode, and so is a root pair of two leaves.
     ws.exact.cache_begin(mb.mesh().vertex_count());
     'queue: while let Some(e) = ws.heap.pop() {
@@ -318,7 +325,7 @@ pub fn adb_intersects(
             break;
         }
         if (e.a, e.b) != (0, 0) {
-            frontier_log_miss -= (1.0 - e.p).ln();
+            frontier_log_miss -= e.log_miss;
             frontier_len -= 1;
             if disjoint_evidence && e.p >= pair_threshold {
                 // Replaced by its children: only disjoint pairs count as evidence.
@@ -372,7 +379,8 @@ pub fn adb_intersects(
                 if p > out.max_pair_probability {
                     out.max_pair_probability = p;
                 }
-                frontier_log_miss += (1.0 - p).ln();
+                let log_miss = (1.0 - p).ln();
+                frontier_log_miss += log_miss;
                 frontier_len += 1;
                 let key = witness_key(p, ia, ib);
                 if p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
@@ -385,9 +393,15 @@ pub fn adb_intersects(
                         break 'queue;
                     }
                 }
+
                 let both_leaves = cx.is_leaf() && cy.is_leaf();
                 if query.exact_leaves || (p > query.p_prune && !both_leaves) {
-                    ws.heap.push(Entry { p, a: ia, b: ib });
+                    ws.heap.push(Entry {
+                        p,
+                        log_miss,
+                        a: ia,
+                        b: ib,
+                    });
                 } else if both_leaves && p > 0.0 {
                     // A leaf pair stays in the frontier: it shapes the contact region.
                     let w = witness(ia, ib, None);
