@@ -393,7 +393,6 @@ pub fn adb_intersects(
                         break 'queue;
                     }
                 }
-
                 let both_leaves = cx.is_leaf() && cy.is_leaf();
                 if query.exact_leaves || (p > query.p_prune && !both_leaves) {
                     ws.heap.push(Entry {

@@ -237,10 +237,13 @@ impl ContactQueue {
         let waiting = self.queue.len();
         let sorted = &mut self.sorted;
         sorted.clear();
-        sorted.extend(keys.iter().map(|&(_, i)| match (i as usize).checked_sub(waiting) {
-            None => self.queue[i as usize],
-            Some(f) => fresh[f],
-        }));
+        sorted.extend(
+            keys.iter()
+                .map(|&(_, i)| match (i as usize).checked_sub(waiting) {
+                    None => self.queue[i as usize],
+                    Some(f) => fresh[f],
+                }),
+        );
         std::mem::swap(&mut self.queue, sorted);
         fresh.clear();
     }
