@@ -23,7 +23,15 @@ fn main() {
         "intestine: {name}, {} triangles, {frames} frames",
         mesh.triangle_count()
     );
-    let mut app = Scene::Intestine.build(&Options::default());
+    let options = Options {
+        budget_us: Scene::Intestine.default_budget_us(),
+        ..Options::default()
+    };
+    println!(
+        "  collision budget {} ms per frame",
+        options.budget_us / 1000
+    );
+    let mut app = Scene::Intestine.build(&options);
     let start = Instant::now();
     for _ in 0..frames {
         app.update();

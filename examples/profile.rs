@@ -7,7 +7,8 @@
 //!     [--json out.json] [--svg out.svg]
 //! ```
 //!
-//! `--budget-us 0` means no budget; `--node-budget N` replaces the time budget with a work
+//! Without `--budget-us` the scene's own budget applies (2000 µs; 30000 µs for the
+//! intestine); `--budget-us 0` means no budget; `--node-budget N` replaces the time budget with a work
 //! budget of N ADB node pairs per frame (deterministic: the same run for any thread count,
 //! which is how to compare thread counts fairly).
 //!
@@ -47,6 +48,7 @@ fn parse() -> Result<Args, String> {
         json: None,
         svg: None,
     };
+    let mut budget = None;
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         let mut value = || it.next().ok_or(format!("{flag} needs a value"));
@@ -59,7 +61,7 @@ fn parse() -> Result<Args, String> {
             "--frames" => args.frames = num(value()?)? as usize,
             "--entities" => args.options.entities = num(value()?)? as usize,
             "--threads" => args.options.threads = num(value()?)?.max(1) as usize,
-            "--budget-us" => args.options.budget_us = num(value()?)?,
+            "--budget-us" => budget = Some(num(value()?)?),
             "--node-budget" => args.options.node_budget = Some(num(value()?)?),
             "--seed" => args.options.seed = num(value()?)?,
             "--json" => args.json = Some(value()?),
@@ -71,6 +73,7 @@ fn parse() -> Result<Args, String> {
     if args.frames == 0 {
         args.frames = args.scene.default_frames();
     }
+    args.options.budget_us = budget.unwrap_or(args.scene.default_budget_us());
     Ok(args)
 }
 
@@ -269,6 +272,12 @@ fn report(
         c.cached_pairs,
         agreement
     );
+    if c.tracker_steps_cut > 0 {
+        println!(
+            "tracking: {} tracker steps cut by the budget (an eighth of their searches, the other pairs re-measured)",
+            c.tracker_steps_cut
+        );
+    }
     let test_ms = c.test_time.as_secs_f64() * 1e3;
     let per_ms = |n: u64| {
         if test_ms > 0.0 {

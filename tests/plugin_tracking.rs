@@ -91,6 +91,31 @@ fn tracked_self_collision_reports_the_fold_once_and_keeps_its_pairs() {
 }
 
 #[test]
+fn a_spent_time_budget_cuts_the_trackers_but_the_fold_is_still_found() {
+    // A budget far too small for anything: every tracker step runs past its deadline.
+    let config = CollisionConfig {
+        budget: FrameBudget::Time(std::time::Duration::from_nanos(1)),
+        ..Default::default()
+    };
+    let mut app = app_with(config, 2);
+    let cloth = spawn_folded(&mut app);
+    for _ in 0..32 {
+        app.update();
+    }
+    let counters = app.world().resource::<CollisionDiagnostics>().counters;
+    assert!(
+        counters.tracker_steps_cut >= 30,
+        "{} tracker steps cut",
+        counters.tracker_steps_cut
+    );
+    let events = log(&app);
+    assert_eq!(events.started, vec![(cloth, cloth)], "found, more slowly");
+    for c in &events.contacts {
+        assert!(c.point.is_finite() && c.normal.is_finite() && c.depth.is_finite());
+    }
+}
+
+#[test]
 fn tracked_rigid_pairs_find_their_contact() {
     let mut app = app();
     let tracked = Fidelity::Tracking {

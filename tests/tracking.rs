@@ -203,6 +203,69 @@ fn self_collision_of_a_folded_cloth_reports_only_real_contacts() {
 }
 
 #[test]
+fn a_passed_deadline_cuts_the_search_but_keeps_the_pairs_and_their_contacts_real() {
+    let (flat, folded) = folded_cloth(24, 0.1, -0.02);
+    let mut surface = TrackedSurface::new(flat.clone());
+    surface.set_positions(&folded).unwrap();
+    let config = TrackerConfig::for_surface(&surface);
+    let (h, n) = (config.thickness, config.pairs_per_frame);
+    let mut tracker = Tracker::new(config.clone());
+    let mut twin = Tracker::new(config.clone());
+    // No deadline is the plain step, bit for bit.
+    for _ in 0..4 {
+        let a = tracker.step_self_until(&surface, None).to_vec();
+        assert_eq!(a, twin.step_self(&surface));
+        assert!(!tracker.stats().cut);
+    }
+    let kept = tracker.pairs().len();
+    assert!(kept >= 8, "{kept} pairs");
+    // The cloth moves on; the deadline has passed before the step begins.
+    let moved: Vec<Vec3> = folded
+        .iter()
+        .map(|p| *p + Vec3::new(0.0, 0.001, 0.0))
+        .collect();
+    surface.set_positions(&moved).unwrap();
+    let past = std::time::Instant::now();
+    let contacts = tracker.step_self_until(&surface, Some(past)).to_vec();
+    let stats = *tracker.stats();
+    assert!(stats.cut);
+    assert!(
+        stats.sampled <= n.div_ceil(8),
+        "{} new pairs",
+        stats.sampled
+    );
+    assert!(
+        stats.propagated <= config.propagation_limit.div_ceil(8),
+        "{} propagated past the deadline",
+        stats.propagated
+    );
+    assert!(
+        stats.remeasured >= kept * 3 / 4,
+        "{} of {kept} kept pairs re-measured",
+        stats.remeasured
+    );
+    assert!(tracker.pairs().iter().all(|p| p.distance.is_finite()));
+    // Its contacts are measured at the new positions: real, within the thickness.
+    let mesh = surface.mesh().clone();
+    check_contacts(&contacts, &mesh, &Pose::IDENTITY, &mesh, &Pose::IDENTITY, h);
+    assert!(!contacts.is_empty(), "the fold's contacts are kept");
+    // With time again, the step searches and draws as before.
+    tracker.step_self_until(&surface, None);
+    assert!(!tracker.stats().cut && tracker.stats().sampled > stats.sampled);
+    // A tracker that is late from its first step on still finds the fold, more slowly.
+    let mut starved = Tracker::new(config.clone());
+    let found = (0..64).any(|_| {
+        !starved
+            .step_self_until(&surface, Some(std::time::Instant::now()))
+            .is_empty()
+    });
+    assert!(
+        found,
+        "a tracker always over its budget never found the fold"
+    );
+}
+
+#[test]
 fn flat_and_curved_sheets_alone_have_no_self_contacts() {
     // Adjacency exclusion: with a thickness of half an edge, neighbours would all "touch".
     for mesh in [

@@ -98,6 +98,9 @@ pub struct CollisionCounters {
     pub contacts: u64,
     /// Runs whose collision stages (Prepare to Report) took longer than a time budget.
     pub overrun_runs: u64,
+    /// Tracker steps (of pairs and of self-colliding meshes) cut by the time budget: past
+    /// their deadline no new pairs, no local search, no propagation.
+    pub tracker_steps_cut: u64,
 }
 
 /// Timings and counters of the collision pipeline: per stage, the time of the last run (`None`
@@ -111,6 +114,8 @@ pub struct CollisionDiagnostics {
     pub collision_time: Duration,
     stages: [StageRecord; 8],
     reserve: Duration,
+    /// The Report stage's time in the last run.
+    report_time: Duration,
     narrow_end: Option<Instant>,
     /// How far below the time budget the narrow phase aims (learnt from overruns).
     margin: Duration,
@@ -128,6 +133,7 @@ impl Default for CollisionDiagnostics {
             collision_time: Duration::ZERO,
             stages: [StageRecord::default(); 8],
             reserve: Duration::ZERO,
+            report_time: Duration::ZERO,
             narrow_end: None,
             margin: Duration::ZERO,
             begun_by_refit: false,
@@ -168,6 +174,14 @@ impl CollisionDiagnostics {
         budget.saturating_sub(self.margin.min(budget / 4))
     }
 
+    /// When the Tracking stages stop searching under a time `budget`: the run's target less
+    /// what the Report stage took last time, but no earlier than a sixteenth of the budget
+    /// from `now` (without any search nothing converges).
+    pub(crate) fn tracking_deadline(&self, budget: Duration, now: Instant) -> Instant {
+        let end = self.frame_start + self.time_target(budget).saturating_sub(self.report_time);
+        end.max(now + budget / 16)
+    }
+
     /// Marks the end of the narrow phase in this run (for the reserve of the next).
     pub(crate) fn narrow_phase_ended(&mut self) {
         self.narrow_end = Some(Instant::now());
@@ -188,6 +202,7 @@ pub(crate) fn begin_frame(diag: &mut CollisionDiagnostics) {
 /// Report stage (not a system of its own: one scheduling hop less per run).
 pub(crate) fn end_frame(diag: &mut CollisionDiagnostics, config: &CollisionConfig) {
     diag.collision_time = diag.frame_start.elapsed();
+    diag.report_time = diag.stage(Stage::Report).last.unwrap_or_default();
     let after_stages: Duration = [Stage::SelfCollision, Stage::Tracking, Stage::Report]
         .iter()
         .filter_map(|&s| diag.stage(s).last)

@@ -23,7 +23,7 @@ use super::components::{Deformable, Fidelity, SelfCollision};
 use super::contact::{ContactPoint, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::narrow_phase::{Method, PairOutcome, PairOutcomes, spread, with_workspaces};
-use super::plugin::CollisionConfig;
+use super::plugin::{CollisionConfig, FrameBudget};
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderFrame, Geometry};
 use crate::bvh::{CollisionMesh, TrianglePair, self_intersections};
@@ -223,13 +223,15 @@ fn job(state: &mut TrackingState, frame: &ColliderFrame, a: u32, b: u32, seed: u
     }
 }
 
-/// Runs `jobs` in parallel, each on its own tracker.
+/// Runs `jobs` in parallel, each on its own tracker; past `deadline` the trackers cut their
+/// work (see [`Tracker::step_self_until`]).
 fn run_jobs(
     jobs: &mut [Job],
     frame: &ColliderFrame,
     state: &TrackingState,
     pool: &CollisionTaskPool,
     max_contacts: usize,
+    deadline: Option<Instant>,
 ) {
     pool.for_each_mut(jobs, 1, |job| {
         let (ea, eb) = (
@@ -239,10 +241,11 @@ fn run_jobs(
         let sa = &state.surfaces[&ea.entity].surface;
         let self_mode = job.a == job.b;
         let found: &[Contact] = if self_mode {
-            job.tracker.step_self(sa)
+            job.tracker.step_self_until(sa, deadline)
         } else {
             let sb = &state.surfaces[&eb.entity].surface;
-            job.tracker.step_pair(sa, &ea.pose, sb, &eb.pose)
+            job.tracker
+                .step_pair_until(sa, &ea.pose, sb, &eb.pose, deadline)
         };
         let step = found.len().div_ceil(max_contacts.max(1)).max(1);
         job.contacts = found
@@ -381,20 +384,31 @@ pub fn self_collision(
 
     // Stochastic self-collision.
     let pairs: Vec<(u32, u32)> = tracked.iter().map(|&i| (i, i)).collect();
-    let jobs = tracked_jobs(&mut state, &frame, &pool, config.seed, &pairs, max);
+    let deadline = tracking_deadline(&config, &diag);
+    let jobs = tracked_jobs(
+        &mut state,
+        &frame,
+        &pool,
+        config.seed,
+        &pairs,
+        max,
+        deadline,
+    );
     finish_jobs(
         jobs,
         &mut state,
         &mut outcomes,
         &mut features,
         &mut commands,
+        &mut diag,
         Method::SelfCollision,
     );
     diag.record(Stage::SelfCollision, start.elapsed(), meshes.len() as u64);
 }
 
 /// The tracker jobs of `pairs` (entry indices; `(i, i)` for a self-colliding mesh), run: the
-/// surfaces of the entries involved brought up to date first, at most `max` contacts each.
+/// surfaces of the entries involved brought up to date first, at most `max` contacts each,
+/// the trackers' searches cut at `deadline`.
 fn tracked_jobs(
     state: &mut TrackingState,
     frame: &ColliderFrame,
@@ -402,6 +416,7 @@ fn tracked_jobs(
     seed: u64,
     pairs: &[(u32, u32)],
     max: usize,
+    deadline: Option<Instant>,
 ) -> Vec<Job> {
     let mut involved: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
     involved.sort_unstable();
@@ -415,7 +430,7 @@ fn tracked_jobs(
         .iter()
         .map(|&(a, b)| job(state, frame, a, b, seed))
         .collect();
-    run_jobs(&mut jobs, frame, state, pool, max);
+    run_jobs(&mut jobs, frame, state, pool, max, deadline);
     jobs
 }
 
@@ -426,9 +441,11 @@ fn finish_jobs(
     outcomes: &mut PairOutcomes,
     features: &mut Query<&mut FeaturePairs>,
     commands: &mut Commands,
+    diag: &mut CollisionDiagnostics,
     method: Method,
 ) {
     for job in jobs {
+        diag.counters.tracker_steps_cut += u64::from(job.tracker.stats().cut);
         let (a, b) = job.key;
         outcomes.outcomes.push(PairOutcome::exact(
             (a, b),
@@ -439,6 +456,15 @@ fn finish_jobs(
         ));
         record_pairs(features, commands, a, b, job.pairs);
         state.trackers.insert(job.key, job.tracker);
+    }
+}
+
+/// When the trackers of this run stop searching: under a time budget, what the run's target
+/// leaves after the Report stage (see [`CollisionDiagnostics::tracking_deadline`]).
+fn tracking_deadline(config: &CollisionConfig, diag: &CollisionDiagnostics) -> Option<Instant> {
+    match config.budget {
+        FrameBudget::Time(budget) => Some(diag.tracking_deadline(budget, Instant::now())),
+        _ => None,
     }
 }
 
@@ -458,13 +484,23 @@ pub fn track_pairs(
     let start = Instant::now();
     let pairs: Vec<(u32, u32)> = outcomes.tracked.iter().map(|p| (p.a, p.b)).collect();
     let max = config.max_self_contacts;
-    let jobs = tracked_jobs(&mut state, &frame, &pool, config.seed, &pairs, max);
+    let deadline = tracking_deadline(&config, &diag);
+    let jobs = tracked_jobs(
+        &mut state,
+        &frame,
+        &pool,
+        config.seed,
+        &pairs,
+        max,
+        deadline,
+    );
     finish_jobs(
         jobs,
         &mut state,
         &mut outcomes,
         &mut features,
         &mut commands,
+        &mut diag,
         Method::Tracking,
     );
     diag.record(Stage::Tracking, start.elapsed(), pairs.len() as u64);

@@ -1,6 +1,7 @@
 //! The tracker: persistent feature pairs, updated every frame.
 
 use std::collections::HashSet;
+use std::time::Instant;
 
 use glam::DVec3;
 use rand::SeedableRng;
@@ -19,6 +20,10 @@ use crate::geometry::{ClosestPoints, Pose};
 /// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
 /// `Searcher::slide_limit`).
 const SLIDE_LIMIT_EDGES: f64 = 1.0;
+
+/// Past a step's deadline, one in this many of its searches still runs (see
+/// [`Tracker::step_self_until`]).
+const LATE_SHARE: usize = 8;
 
 /// A tracked pair of locally closest features, persistent across frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -67,6 +72,12 @@ pub struct StepStats {
     pub contacts: usize,
     /// Of which found by propagation.
     pub propagated: usize,
+    /// Whether the step's deadline passed (see [`Tracker::step_self_until`]): from then on an
+    /// eighth of the searches and of the propagation ran, the other pairs were only
+    /// re-measured.
+    pub cut: bool,
+    /// Kept pairs re-measured without a local search because the deadline had passed.
+    pub remeasured: usize,
 }
 
 /// Stochastic closest-feature tracking (Raghupathi et al., Guy and Debunne, Kimmerle et al.)
@@ -172,11 +183,27 @@ impl Tracker {
     /// One frame of self-collision tracking of `surface` at its current positions. Contacts
     /// are in the mesh's own frame; triangles sharing a vertex are never paired.
     pub fn step_self(&mut self, surface: &TrackedSurface) -> &[Contact] {
+        self.step_self_until(surface, None)
+    }
+
+    /// [`step_self`](Self::step_self) inside a time budget: once `deadline` has passed, the
+    /// step does an eighth of its work: new random pairs drawn every eighth step only (an
+    /// eighth of them searched if the deadline passes after drawing), each kept pair searched
+    /// every eighth step and otherwise only re-measured on its current features (one
+    /// evaluation), an eighth of the collision propagation ([`StepStats::cut`],
+    /// [`StepStats::remeasured`]). Accuracy degrades (pairs converge more slowly, new contacts
+    /// are found later), frame time much less; a tracker that is always late still finds and
+    /// follows its contacts. `None`: no deadline.
+    pub fn step_self_until(
+        &mut self,
+        surface: &TrackedSurface,
+        deadline: Option<Instant>,
+    ) -> &[Contact] {
         let placed = Placed {
             surface,
             pose: None,
         };
-        self.step(placed, placed, true, surface.size());
+        self.step(placed, placed, true, surface.size(), deadline);
         &self.contacts
     }
 
@@ -189,6 +216,19 @@ impl Tracker {
         b: &TrackedSurface,
         pose_b: &Pose,
     ) -> &[Contact] {
+        self.step_pair_until(a, pose_a, b, pose_b, None)
+    }
+
+    /// [`step_pair`](Self::step_pair) inside a time budget (see
+    /// [`step_self_until`](Self::step_self_until)).
+    pub fn step_pair_until(
+        &mut self,
+        a: &TrackedSurface,
+        pose_a: &Pose,
+        b: &TrackedSurface,
+        pose_b: &Pose,
+        deadline: Option<Instant>,
+    ) -> &[Contact] {
         let rel = pose_a.inverse_mul(pose_b).to_f64();
         let pa = Placed {
             surface: a,
@@ -198,7 +238,7 @@ impl Tracker {
             surface: b,
             pose: Some(rel),
         };
-        self.step(pa, pb, false, a.size().max(b.size()));
+        self.step(pa, pb, false, a.size().max(b.size()), deadline);
         if *pose_a != Pose::IDENTITY {
             for c in &mut self.contacts {
                 c.point_a = pose_a.transform_point(c.point_a);
@@ -209,7 +249,15 @@ impl Tracker {
         &self.contacts
     }
 
-    fn step(&mut self, a: Placed, b: Placed, self_mode: bool, size: f32) {
+    fn step(
+        &mut self,
+        a: Placed,
+        b: Placed,
+        self_mode: bool,
+        size: f32,
+        deadline: Option<Instant>,
+    ) {
+        let passed = || deadline.is_some_and(|d| Instant::now() >= d);
         let cfg = &self.config;
         let mean_edge = a
             .surface
@@ -236,9 +284,18 @@ impl Tracker {
         s.starts.clear();
         let far_eps = cfg.far_epsilon.max(0.0) * size;
         let margin = cfg.thickness.max(0.0) + far_eps;
+        // Past the deadline an eighth of the work still gets done (new pairs every eighth step,
+        // an eighth of them searched if the deadline passes after drawing, each kept pair
+        // searched every eighth step): a tracker that starts late, or stays over its budget,
+        // still finds and follows its contacts, only more slowly.
+        let late_fresh = cfg.pairs_per_frame.div_ceil(LATE_SHARE);
+        stats.cut = passed();
+        // Drawing has a cost of its own (hierarchy sampling looks for the overlapping patches
+        // of the whole surface): late, it draws every eighth step only.
+        let draw_now = !stats.cut || frame.is_multiple_of(LATE_SHARE as u64);
         draw(
             cfg.sampling,
-            cfg.pairs_per_frame,
+            if draw_now { cfg.pairs_per_frame } else { 0 },
             &a,
             &b,
             self_mode,
@@ -261,12 +318,30 @@ impl Tracker {
             .iter()
             .map(|p| (p.triangle_a, p.triangle_b, p.age + 1));
         let fresh = s.starts.iter().map(|&(x, y)| (x, y, 0));
-        for (ta, tb, age) in kept.chain(fresh) {
+        let mut fresh_late = 0;
+        for (k, (ta, tb, age)) in kept.chain(fresh).enumerate() {
             if searcher.excluded(ta, tb) {
                 continue;
             }
+            stats.cut = stats.cut || passed();
+            let search = !stats.cut
+                || if age == 0 {
+                    fresh_late += 1;
+                    fresh_late <= late_fresh
+                } else {
+                    (k as u64 + frame).is_multiple_of(LATE_SHARE as u64)
+                };
+            if !search && age == 0 {
+                continue;
+            }
             let start = searcher.locate(ta, tb, &mut counters);
-            let (l, sliding) = searcher.descend(start, &mut counters);
+            let (l, sliding) = if search {
+                searcher.descend(start, &mut counters)
+            } else {
+                // Out of time: re-measured where it is (one evaluation), searched later.
+                stats.remeasured += 1;
+                (start, false)
+            };
             if sliding || searcher.sliding(&l) {
                 stats.pruned.sliding += 1;
                 continue;
@@ -322,7 +397,14 @@ impl Tracker {
         }
         let mut added = 0;
         while let Some((ta, tb)) = s.queue.pop() {
-            if added >= cfg.propagation_limit {
+            stats.cut = stats.cut || passed();
+            // Late, an eighth of the propagation (each step of it is one evaluation).
+            let limit = if stats.cut {
+                cfg.propagation_limit.div_ceil(LATE_SHARE)
+            } else {
+                cfg.propagation_limit
+            };
+            if added >= limit {
                 break;
             }
             let na = a
@@ -336,7 +418,7 @@ impl Tracker {
                 .iter()
                 .map(|&y| (ta, y));
             for (x, y) in na.chain(nb) {
-                if added >= cfg.propagation_limit {
+                if added >= limit {
                     break;
                 }
                 if searcher.excluded(x, y) || !s.visited.insert(key(self_mode, x, y)) {
