@@ -384,16 +384,7 @@ pub fn self_collision(
 
     // Stochastic self-collision.
     let pairs: Vec<(u32, u32)> = tracked.iter().map(|&i| (i, i)).collect();
-    let deadline = tracking_deadline(&config, &diag);
-    let jobs = tracked_jobs(
-        &mut state,
-        &frame,
-        &pool,
-        config.seed,
-        &pairs,
-        max,
-        deadline,
-    );
+    let jobs = tracked_jobs(&mut state, &frame, &pool, &config, &diag, &pairs);
     finish_jobs(
         jobs,
         &mut state,
@@ -407,17 +398,18 @@ pub fn self_collision(
 }
 
 /// The tracker jobs of `pairs` (entry indices; `(i, i)` for a self-colliding mesh), run: the
-/// surfaces of the entries involved brought up to date first, at most `max` contacts each,
-/// the trackers' searches cut at `deadline`.
+/// surfaces of the entries involved brought up to date first, at most `max_self_contacts`
+/// contacts each, the trackers' searches cut at the run's deadline under a time budget.
 fn tracked_jobs(
     state: &mut TrackingState,
     frame: &ColliderFrame,
     pool: &CollisionTaskPool,
-    seed: u64,
+    config: &CollisionConfig,
+    diag: &CollisionDiagnostics,
     pairs: &[(u32, u32)],
-    max: usize,
-    deadline: Option<Instant>,
 ) -> Vec<Job> {
+    let (seed, max) = (config.seed, config.max_self_contacts);
+    let deadline = tracking_deadline(config, diag);
     let mut involved: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
     involved.sort_unstable();
     involved.dedup();
@@ -483,17 +475,7 @@ pub fn track_pairs(
 ) {
     let start = Instant::now();
     let pairs: Vec<(u32, u32)> = outcomes.tracked.iter().map(|p| (p.a, p.b)).collect();
-    let max = config.max_self_contacts;
-    let deadline = tracking_deadline(&config, &diag);
-    let jobs = tracked_jobs(
-        &mut state,
-        &frame,
-        &pool,
-        config.seed,
-        &pairs,
-        max,
-        deadline,
-    );
+    let jobs = tracked_jobs(&mut state, &frame, &pool, &config, &diag, &pairs);
     finish_jobs(
         jobs,
         &mut state,
