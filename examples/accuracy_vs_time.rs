@@ -184,6 +184,14 @@ fn configs() -> Vec<Config> {
         },
     });
     out.push(Config {
+        label: "calibrated p0.99 k10 early".into(),
+        family: "estimator",
+        query: AdbQuery {
+            decision: Decision::Evidence,
+            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
+        },
+    });
+    out.push(Config {
         label: "calibrated p0.99 k10 exact-leaves".into(),
         family: "estimator",
         query: AdbQuery {

@@ -4,8 +4,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, PaperEstimator, PlanarityEstimator,
-    adb_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, PaperEstimator,
+    PlanarityEstimator, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::geometry::Pose;
@@ -84,6 +84,47 @@ fn exact_leaves_with_p_min_one_equal_the_exact_query() {
             );
         }
     }
+}
+
+#[test]
+fn the_early_decision_stops_no_later_and_only_to_say_collision() {
+    let trees = trees();
+    let mut ws = AdbWorkspace::new();
+    let (mut earlier, mut colliding) = (0, 0);
+    for (name, t) in &trees {
+        let poses = near_contact_poses(t.collision_mesh(), t.collision_mesh(), 24, 0.15, 5);
+        for leaves in [false, true] {
+            let confidence = AdbQuery {
+                exact_leaves: leaves,
+                ..AdbQuery::default()
+            };
+            let early = AdbQuery {
+                decision: Decision::Evidence,
+                ..confidence.clone()
+            };
+            for p in &poses {
+                let c = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &confidence, &mut ws);
+                let e = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &early, &mut ws);
+                assert!(e.node_pairs_visited <= c.node_pairs_visited, "{name}");
+                colliding += usize::from(c.collides);
+                if e.node_pairs_visited < c.node_pairs_visited {
+                    // Stopped early: only ever on evidence of a collision, confident of it.
+                    earlier += 1;
+                    assert!(e.collides, "{name}: stopped early without a collision");
+                    assert!(e.probability >= 0.99 - 1e-9, "{name}: {}", e.probability);
+                } else {
+                    // Same path: the same answer.
+                    assert_eq!(e, c, "{name}");
+                }
+                // Never misses what the default finds.
+                assert!(e.collides || !c.collides, "{name}");
+            }
+        }
+    }
+    assert!(
+        colliding > 20 && earlier > 10,
+        "{earlier} early of {colliding} collisions"
+    );
 }
 
 #[test]

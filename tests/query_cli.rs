@@ -304,6 +304,14 @@ fn adb_flag_errors_exit_2() {
         "--p-min applies to --mode adb only",
     );
     rejects(
+        &with(&["--mode", "exact", "--early"]),
+        "--early applies to --mode adb only",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--early", "--estimator", "paper"]),
+        "--early does not apply to --estimator paper",
+    );
+    rejects(
         &with(&["--mode", "adb", "--budget-us", "1e30"]),
         "--budget-us: invalid value `1e30`",
     );

@@ -80,6 +80,13 @@ pub enum Decision {
     /// ([`AdbOutcome::probability`]) is at least ½.
     #[default]
     Confidence,
+    /// [`Decision::Confidence`], and besides: "collision" as soon as the pairs that count as
+    /// evidence together reach `p_min` taken as independent (`Σ −ln(1 − p) ≥ −ln(1 − p_min)`).
+    /// `k_min` pairs at the threshold are worth `k_min / r` ≥ 1 independent ones, so this stops
+    /// no later than `Confidence` and earlier when a few pairs are nearly certain: faster on
+    /// colliding poses, more false positives near contact (the `accuracy_vs_time` report
+    /// measures both).
+    Evidence,
 }
 
 impl Default for AdbQuery {
@@ -278,7 +285,14 @@ pub fn adb_intersects(
     // Which pairs count toward k_min: the papers count every pair with p ≥ p_min; the
     // confidence decision counts disjoint frontier pairs with p ≥ 1 − (1 − p_min)^(r/k_min),
     // so that k_min of them, worth k_min/r independent pieces of evidence, reach p_min.
-    let disjoint_evidence = query.decision == Decision::Confidence;
+    let disjoint_evidence = query.decision != Decision::Paper;
+    // Σ −ln(1 − p) over the frontier pairs that count as evidence, and what it must reach for
+    // `Decision::Evidence` to stop.
+    let mut evidence = 0.0f64;
+    let evidence_needed = match query.decision {
+        Decision::Evidence => -(1.0 - query.p_min.clamp(0.0, MAX_ESTIMATE)).ln(),
+        _ => f64::INFINITY,
+    };
     let pair_threshold = if disjoint_evidence {
         let independent = f64::from(query.k_min.max(1)) / EVIDENCE_REDUNDANCY;
         1.0 - (1.0 - query.p_min.clamp(0.0, 1.0)).powf(1.0 / independent.max(1.0))
@@ -330,6 +344,7 @@ pub fn adb_intersects(
             if disjoint_evidence && e.p >= pair_threshold {
                 // Replaced by its children: only disjoint pairs count as evidence.
                 out.pairs_found -= 1;
+                evidence += e.log_miss;
             }
         }
         let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
@@ -388,7 +403,8 @@ pub fn adb_intersects(
                 }
                 if p >= pair_threshold {
                     out.pairs_found += 1;
-                    if out.pairs_found >= query.k_min {
+                    evidence -= log_miss;
+                    if out.pairs_found >= query.k_min || evidence >= evidence_needed {
                         out.collides = true;
                         break 'queue;
                     }
@@ -420,7 +436,7 @@ pub fn adb_intersects(
         out.probability = noisy_or.clamp(0.0, 1.0);
         if !out.collides {
             out.collides = match query.decision {
-                Decision::Confidence => out.probability >= 0.5,
+                Decision::Confidence | Decision::Evidence => out.probability >= 0.5,
                 Decision::Paper => out.budget_exhausted && out.pairs_found >= 1,
             };
         }
