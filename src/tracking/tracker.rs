@@ -187,13 +187,13 @@ impl Tracker {
     }
 
     /// [`step_self`](Self::step_self) inside a time budget: once `deadline` has passed, the
-    /// step does an eighth of its work: new random pairs drawn every eighth step only (an
-    /// eighth of them searched if the deadline passes after drawing), each kept pair searched
-    /// every eighth step and otherwise only re-measured on its current features (one
-    /// evaluation), an eighth of the collision propagation ([`StepStats::cut`],
-    /// [`StepStats::remeasured`]). Accuracy degrades (pairs converge more slowly, new contacts
-    /// are found later), frame time much less; a tracker that is always late still finds and
-    /// follows its contacts. `None`: no deadline.
+    /// step does an eighth of its work: new random pairs drawn only every eighth step and an
+    /// eighth of them searched, each kept pair searched every eighth step and otherwise only
+    /// re-measured on its current features (one evaluation), an eighth of the collision
+    /// propagation ([`StepStats::cut`], [`StepStats::remeasured`]). Accuracy degrades (pairs
+    /// converge more slowly, new contacts are found later), frame time much less; a tracker
+    /// that is always late still finds and follows its contacts. With a deadline the result
+    /// depends on timing; `None` (no deadline) is [`step_self`](Self::step_self), reproducible.
     pub fn step_self_until(
         &mut self,
         surface: &TrackedSurface,
@@ -284,10 +284,10 @@ impl Tracker {
         s.starts.clear();
         let far_eps = cfg.far_epsilon.max(0.0) * size;
         let margin = cfg.thickness.max(0.0) + far_eps;
-        // Past the deadline an eighth of the work still gets done (new pairs every eighth step,
-        // an eighth of them searched if the deadline passes after drawing, each kept pair
-        // searched every eighth step): a tracker that starts late, or stays over its budget,
-        // still finds and follows its contacts, only more slowly.
+        // Past the deadline an eighth of the work still gets done (new pairs every eighth step
+        // and an eighth of them searched, each kept pair searched every eighth step): a
+        // tracker that starts late, or stays over its budget, still finds and follows its
+        // contacts, only more slowly.
         let late_fresh = cfg.pairs_per_frame.div_ceil(LATE_SHARE);
         stats.cut = passed();
         // Drawing has a cost of its own (hierarchy sampling looks for the overlapping patches
