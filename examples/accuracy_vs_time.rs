@@ -192,6 +192,15 @@ fn configs() -> Vec<Config> {
         },
     });
     out.push(Config {
+        label: "calibrated p0.99 k10 early exact-leaves".into(),
+        family: "estimator",
+        query: AdbQuery {
+            decision: Decision::Evidence,
+            exact_leaves: true,
+            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
+        },
+    });
+    out.push(Config {
         label: "calibrated p0.99 k10 exact-leaves".into(),
         family: "estimator",
         query: AdbQuery {

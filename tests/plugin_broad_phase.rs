@@ -1,6 +1,7 @@
 //! The broad phase against brute force: the candidate pairs are exactly the pairs of valid
 //! colliders whose world boxes overlap and whose layers interact, run after run, while bodies
-//! move, appear and disappear (the sweep keeps its order between runs), on 1 and 2 threads.
+//! move, appear and disappear (the sweep keeps its order between runs), rest (the last pairs
+//! are reused), change layers, on 1 and 2 threads.
 mod plugin_support;
 
 use bevy_app::App;
@@ -91,6 +92,31 @@ fn candidate_pairs_are_exactly_the_overlapping_interacting_boxes() {
             for k in 0..10 {
                 let pose = random.pose(12.0);
                 bodies.push(spawn(&mut app, (shapes[k % 3].clone(), pose)));
+            }
+        }
+        // At rest (the last pairs are reused), then a change of layers alone, then one body
+        // moving alone: each run still exactly the brute-force pairs.
+        for run in 0..4 {
+            app.update();
+            let found = app.world().resource::<CandidatePairs>().pairs().to_vec();
+            assert_eq!(
+                found,
+                brute_force(&app),
+                "threads {threads}, rest run {run}"
+            );
+            match run {
+                1 => {
+                    for &e in bodies.iter().step_by(2) {
+                        app.world_mut()
+                            .entity_mut(e)
+                            .insert(CollisionLayers::new(0b100, 0b100));
+                    }
+                }
+                2 => {
+                    let mut pose = app.world_mut().get_mut::<ColliderPose>(bodies[0]).unwrap();
+                    pose.0.translation += Vec3::new(3.0, 0.0, 0.0);
+                }
+                _ => {}
             }
         }
     }

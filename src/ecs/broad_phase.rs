@@ -50,6 +50,10 @@ pub struct BroadPhaseState {
     lanes: Vec<Vec<SweepBox>>,
     found: Vec<Vec<CandidatePair>>,
     by_b: Vec<CandidatePair>,
+    /// What the last run's pairs were found from: each entry's entity, box and layers, in
+    /// entry order. The same again (nothing moved, came, went or changed layers: a scene at
+    /// rest) gives the same pairs, so the sweep is skipped.
+    last_input: Vec<(Entity, Aabb, CollisionLayers)>,
 }
 
 /// Collects the candidate pairs of the run.
@@ -63,6 +67,20 @@ pub fn sweep_and_prune(
     let start = Instant::now();
     let entries = &frame.entries;
     let state = &mut *state;
+    let unchanged = state.last_input.len() == entries.len()
+        && state
+            .last_input
+            .iter()
+            .zip(entries)
+            .all(|(&(e, aabb, layers), x)| e == x.entity && aabb == x.aabb && layers == x.layers);
+    if unchanged {
+        diag.record(Stage::BroadPhase, start.elapsed(), out.pairs.len() as u64);
+        return;
+    }
+    state.last_input.clear();
+    state
+        .last_input
+        .extend(entries.iter().map(|e| (e.entity, e.aabb, e.layers)));
     choose_axis(frame.as_ref(), state);
     let axis = state.axis;
     // Last run's order, minus the entities gone, plus the new ones at the end.
