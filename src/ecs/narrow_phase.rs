@@ -4,9 +4,10 @@
 //! Under a time budget the exact pairs and the most urgent others that fit (by the measured
 //! cost of a test) are tested and the rest answered from memory; tested ADB pairs get
 //! node-pair slices of the budget in proportion to their priority ([`slices`]), and an ADB
-//! traversal stops at its slice and reports its best estimate. Chunks of tests run on the task
-//! pool, each thread with its own workspaces; answers are merged in pair order (by entity), so
-//! the outcome is the same for any number of threads.
+//! traversal stops at its slice and reports its best estimate. Runs of pairs are planned, then
+//! tested or answered from memory, on the task pool, each thread with its own workspaces and
+//! each run writing its answers in place, in pair order (by entity): the outcome is the same
+//! for any number of threads.
 use std::cell::RefCell;
 use std::time::{Duration, Instant};
 
@@ -152,18 +153,18 @@ pub(crate) struct PairMemory {
 }
 
 /// The narrow phase's measured costs (time mode), as moving averages of wall-clock time:
-/// a test (on the pool) and the serial merge per pair (answers from memory included).
+/// a test, and an answer from memory (or for a bounds-only pair), both in parallel.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct PairCosts {
     test_us: f64,
-    merge_us: f64,
+    memory_us: f64,
 }
 
 impl Default for PairCosts {
     fn default() -> Self {
         Self {
             test_us: 2.0,
-            merge_us: 0.05,
+            memory_us: 0.05,
         }
     }
 }
@@ -320,8 +321,8 @@ pub fn narrow_phase(
             let nodes = (tests_us * rate - state.exact_node_pairs).max(0.0);
             let cut = priority_cut(&plan.optional, optional);
             // Exact pairs may also use the time the answers from memory were given.
-            let merge = Duration::from_secs_f64(jobs.len() as f64 * costs.merge_us * 1e-6);
-            let deadlines = Deadlines::at(deadline, deadline + merge);
+            let answers = Duration::from_secs_f64(jobs.len() as f64 * costs.memory_us * 1e-6);
+            let deadlines = Deadlines::at(deadline, deadline + answers);
             (Some(cut), deadlines, Some(nodes as u64))
         }
         FrameBudget::NodePairs(n) => (None, Deadlines::default(), Some(n)),
@@ -408,7 +409,7 @@ pub fn narrow_phase(
     state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * total.exact_node_pairs as f64;
     let costs = &mut state.costs;
     PairCosts::learn(&mut costs.test_us, total.tested as usize, test_time);
-    PairCosts::learn(&mut costs.merge_us, n, memory_time);
+    PairCosts::learn(&mut costs.memory_us, n, memory_time);
     diag.record(Stage::NarrowPhase, start.elapsed(), n as u64);
     diag.narrow_phase_ended();
 }
@@ -600,8 +601,8 @@ fn plan_jobs(
 }
 
 /// How many pairs can be tested in what is left of the time budget, by the measured costs,
-/// and the deadline of the tests. `testable` of the `all` pairs need a test; all of them then
-/// go through the merge (the untested ones answered from memory there).
+/// and the deadline of the tests. `testable` of the `all` pairs need a test; the others (and
+/// the tested ones past the deadline) are answered from memory, which takes time too.
 fn tests_that_fit(
     budget: Duration,
     testable: usize,
@@ -619,7 +620,7 @@ fn tests_that_fit(
         * 1e6;
     // At least a sixteenth of the budget goes to tests, whatever the overhead: without tests
     // nothing ever settles (and pairs that stopped moving cannot be cached).
-    let tests_us = (left_us - all as f64 * costs.merge_us).max(budget.as_secs_f64() * 0.0625e6);
+    let tests_us = (left_us - all as f64 * costs.memory_us).max(budget.as_secs_f64() * 0.0625e6);
     let count = ((tests_us / costs.test_us.max(1e-3)) as usize).min(testable);
     (count, now + Duration::from_secs_f64(tests_us * 1e-6))
 }
@@ -1046,10 +1047,10 @@ mod tests {
         let diag = CollisionDiagnostics::default();
         let costs = PairCosts {
             test_us: 2.0,
-            merge_us: 0.1,
+            memory_us: 0.1,
         };
         let now = diag.frame_start;
-        // 2000 µs, 5000 pairs merged at 0.1 µs: 1500 µs for tests of 2 µs.
+        // 2000 µs, 5000 pairs answered at 0.1 µs: 1500 µs for tests of 2 µs.
         let budget = Duration::from_micros(2000);
         let (count, deadline) = tests_that_fit(budget, 10_000, 5000, &diag, &costs, now);
         assert_eq!(count, 750);
