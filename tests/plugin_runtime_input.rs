@@ -6,7 +6,9 @@ mod plugin_support;
 use bevy_app::App;
 use bevy_ecs::entity::Entity;
 use plugin_support::*;
-use stochastic_collision::ecs::{ColliderFrame, CollisionErrorKind, TrackingState};
+use stochastic_collision::ecs::{
+    ColliderFrame, CollisionErrorKind, Method, PairOutcomes, TrackingState,
+};
 use stochastic_collision::prelude::*;
 
 #[test]
@@ -47,6 +49,60 @@ fn touching_balls(fidelity: Fidelity) -> (App, Entity, Entity) {
     }
     assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
     (app, a, b)
+}
+
+#[test]
+fn a_scene_at_rest_keeps_its_answers_until_a_fidelity_or_the_configuration_changes() {
+    let (mut app, a, b) = touching_balls(Fidelity::Adb { p_min: 0.99 });
+    let outcomes = |app: &App| app.world().resource::<PairOutcomes>().outcomes().to_vec();
+    for _ in 0..3 {
+        app.update();
+    }
+    // At rest: every answer from the cache, the same run after run, the contact reported in
+    // every run, no event.
+    let rest = outcomes(&app);
+    assert_eq!(rest.len(), 1);
+    assert!(
+        rest.iter()
+            .all(|o| o.method == Method::Cached && o.collides)
+    );
+    let contacts = log(&app).contacts.len();
+    for _ in 0..3 {
+        app.update();
+        assert_eq!(outcomes(&app), rest);
+    }
+    assert_eq!(log(&app).contacts.len(), contacts + 3);
+    assert_eq!(log(&app).started, vec![pair(a, b)]);
+    assert!(log(&app).ended.is_empty());
+    // A fidelity changed alone (nothing moves): the pair is answered by its new fidelity (a
+    // pair's is the more accurate of its two).
+    app.world_mut().entity_mut(a).insert(Fidelity::Exact);
+    app.update();
+    assert_eq!(outcomes(&app)[0].method, Method::Exact);
+    app.world_mut()
+        .entity_mut(a)
+        .insert(Fidelity::Adb { p_min: 0.99 });
+    for _ in 0..3 {
+        app.update();
+    }
+    assert_eq!(outcomes(&app)[0].method, Method::Cached);
+    // The configuration changed (the evidence an ADB query needs): answered anew, then cached.
+    app.world_mut().resource_mut::<CollisionConfig>().k_min = 4;
+    app.update();
+    assert_eq!(outcomes(&app)[0].method, Method::Adb);
+    app.update();
+    assert_eq!(outcomes(&app)[0].method, Method::Cached);
+    // A fidelity for colliders without one: planned again.
+    app.world_mut().entity_mut(a).remove::<Fidelity>();
+    app.world_mut().entity_mut(b).remove::<Fidelity>();
+    app.world_mut()
+        .resource_mut::<CollisionConfig>()
+        .default_fidelity = Fidelity::Bounds;
+    app.update();
+    assert_eq!(outcomes(&app)[0].method, Method::Bounds);
+    // Still one contact interval throughout.
+    assert_eq!(log(&app).started, vec![pair(a, b)]);
+    assert!(log(&app).ended.is_empty());
 }
 
 #[test]

@@ -29,6 +29,8 @@ pub struct CandidatePair {
 #[derive(Resource, Debug, Default)]
 pub struct CandidatePairs {
     pub(crate) pairs: Vec<CandidatePair>,
+    /// The pairs are the last run's, reused: no entity came, went, or changed its box or layers.
+    pub(crate) reused: bool,
 }
 
 impl CandidatePairs {
@@ -73,6 +75,7 @@ pub fn sweep_and_prune(
             .iter()
             .zip(entries)
             .all(|(&(e, aabb, layers), x)| e == x.entity && aabb == x.aabb && layers == x.layers);
+    out.reused = unchanged;
     if unchanged {
         diag.record(Stage::BroadPhase, start.elapsed(), out.pairs.len() as u64);
         return;

@@ -129,6 +129,10 @@ pub struct PairOutcomes {
     run_counts: Vec<RunCounts>,
     pub(crate) rate: WorkRate,
     pub(crate) costs: PairCosts,
+    /// The last planned run answered every pair from its cache, and the entries' fidelities
+    /// then (see [`at_rest`]).
+    all_cached: bool,
+    fidelities: Vec<Fidelity>,
     pub(crate) exact_node_pairs: f64,
 }
 
@@ -140,7 +144,7 @@ impl PairOutcomes {
 }
 
 /// What a pair's last answer was.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PairMemory {
     probability: f64,
     collides: bool,
@@ -149,7 +153,25 @@ pub(crate) struct PairMemory {
     stale: u32,
     /// The run whose poses the answer was computed at.
     tested_run: u64,
+    /// How it was asked for: the pair's method and `p_min` then (another fidelity asks anew).
+    method: Method,
+    p_min: f64,
     contact: Option<ContactPoint>,
+}
+
+impl Default for PairMemory {
+    fn default() -> Self {
+        Self {
+            probability: 0.0,
+            collides: false,
+            settled: false,
+            stale: 0,
+            tested_run: 0,
+            method: Method::Bounds,
+            p_min: 1.0,
+            contact: None,
+        }
+    }
 }
 
 /// The narrow phase's measured costs (time mode), as moving averages of wall-clock time:
@@ -273,6 +295,21 @@ pub fn narrow_phase(
     let start = Instant::now();
     let state = &mut *state;
     let entries = &frame.entries;
+    let run = diag.frame;
+    let config_changed = config.is_changed();
+    if at_rest(state, &candidates, entries, config_changed, run) {
+        // Every answer of the last run stands as it is (the memory too).
+        diag.counters.cached_pairs += state.outcomes.len() as u64;
+        diag.record(
+            Stage::NarrowPhase,
+            start.elapsed(),
+            state.outcomes.len() as u64,
+        );
+        diag.narrow_phase_ended();
+        return;
+    }
+    state.fidelities.clear();
+    state.fidelities.extend(entries.iter().map(|e| e.fidelity));
     state.tracked.clear();
     // This run's answers become the next run's memory; the last run's are read meanwhile.
     std::mem::swap(&mut state.history_keys, &mut state.last_keys);
@@ -283,14 +320,13 @@ pub fn narrow_phase(
     let jobs = &mut state.jobs;
     jobs.clear();
     jobs.extend(candidates.pairs.iter().map(|&pair| Job::new(pair)));
-    let run = diag.frame;
     let chunk = pool.chunk_size(jobs.len(), 256);
     let plans = &mut state.plan_counts;
     plans.clear();
     plans.resize(jobs.len().div_ceil(chunk), PlanCounts::default());
     let mut work: Vec<_> = jobs.chunks_mut(chunk).zip(plans.iter_mut()).collect();
     pool.for_each_mut(&mut work, 1, |(c, counts)| {
-        **counts = plan_jobs(c, entries, old_keys, old_memory, run);
+        **counts = plan_jobs(c, entries, old_keys, old_memory, run, config_changed);
     });
     drop(work);
     let plan = plans.iter().fold(PlanCounts::default(), PlanCounts::add);
@@ -410,8 +446,32 @@ pub fn narrow_phase(
     let costs = &mut state.costs;
     PairCosts::learn(&mut costs.test_us, total.tested as usize, test_time);
     PairCosts::learn(&mut costs.memory_us, n, memory_time);
+    state.all_cached = plan.tracked == 0 && total.cached == n as u64;
     diag.record(Stage::NarrowPhase, start.elapsed(), n as u64);
     diag.narrow_phase_ended();
+}
+
+/// Whether this run's answers are the last run's: a scene at rest. The broad phase reused its
+/// pairs (no entity came, went, or changed its box or layers), no pose or geometry changed,
+/// no fidelity and no configuration either, the last run answered every pair from its cache
+/// (rigid pairs whose settled answers still hold; nothing tracked) and nothing was added to its
+/// answers since (a self-collision pass).
+fn at_rest(
+    state: &PairOutcomes,
+    candidates: &CandidatePairs,
+    entries: &[ColliderEntry],
+    config_changed: bool,
+    run: u64,
+) -> bool {
+    candidates.reused
+        && state.all_cached
+        && !config_changed
+        && state.outcomes.len() == state.jobs.len()
+        && state.fidelities.len() == entries.len()
+        && entries
+            .iter()
+            .zip(&state.fidelities)
+            .all(|(e, f)| e.still_since < run && e.fidelity == *f)
 }
 
 /// What a run of jobs counted while planning.
@@ -532,13 +592,14 @@ struct Chosen {
 
 /// Fills in each job of a run of candidates (in pair order): its method (`Tracking`: handed
 /// over to the Tracking stage), last answer, whether that answer still holds, and priority
-/// (`run`: this run's number).
+/// (`run`: this run's number; after a change of configuration no answer is reused as is).
 fn plan_jobs(
     jobs: &mut [Job],
     entries: &[ColliderEntry],
     old_keys: &[(Entity, Entity)],
     old_memory: &[PairMemory],
     run: u64,
+    config_changed: bool,
 ) -> PlanCounts {
     let Some(first) = jobs.first() else {
         return PlanCounts::default();
@@ -566,8 +627,14 @@ fn plan_jobs(
         job.last = (old_keys.get(cursor) == Some(&key)).then_some(cursor as u32);
         let memory = job.last.map(|i| &old_memory[i as usize]);
         // Settled, and neither pose nor geometry changed since: the answer still holds.
-        job.cached =
-            memory.is_some_and(|m| m.settled && m.tested_run >= ea.still_since.max(eb.still_since));
+        // Settled, asked for the same way, the configuration the same, and neither pose nor
+        // geometry changed since: the answer still holds.
+        job.cached = !config_changed
+            && memory.is_some_and(|m| {
+                m.settled
+                    && (m.method, m.p_min) == (job.method, job.p_min)
+                    && m.tested_run >= ea.still_since.max(eb.still_since)
+            });
         // A cached answer that does not collide needs no priority (no test, no contact).
         if job.cached && !memory.is_some_and(|m| m.collides) {
             continue;
@@ -820,6 +887,8 @@ impl Context<'_> {
                 settled: !o.budget_exhausted && o.method != Method::Coherence && both_rigid(ea, eb),
                 stale: 0,
                 tested_run: self.run,
+                method: job.method,
+                p_min: job.p_min,
                 contact: o.contacts.first().copied(),
             },
         };
