@@ -32,8 +32,10 @@ pub enum FrameBudget {
     /// last run; it tests the exact pairs and then the most urgent others that fit in what is
     /// left (aiming a little below the budget when runs overran), sharing node pairs among the
     /// tested ADB pairs by priority. The others keep their previous answer
-    /// ([`Method::Coherence`](super::Method::Coherence)). Results then depend on timing: use
-    /// `NodePairs` for reproducible runs.
+    /// ([`Method::Coherence`](super::Method::Coherence)). The Tracking stages (tracked pairs,
+    /// self-collision) share the budget: past the run's deadline each tracker does an eighth
+    /// of its work ([`Tracker::step_self_until`](crate::tracking::Tracker::step_self_until)).
+    /// Results then depend on timing: use `NodePairs` for reproducible runs.
     Time(Duration),
     /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by
     /// priority. Deterministic (same results for any thread count and machine).
