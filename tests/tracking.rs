@@ -162,11 +162,17 @@ fn folded_cloth(n: u32, fold_at: f32, lift: f32) -> (TriMesh, Vec<Vec3>) {
     (flat, folded)
 }
 
+/// The folded cloth of 24 × 24 cells as a tracked surface, and its folded positions.
+fn folded_surface() -> (TrackedSurface, Vec<Vec3>) {
+    let (flat, folded) = folded_cloth(24, 0.1, -0.02);
+    let mut surface = TrackedSurface::new(flat);
+    surface.set_positions(&folded).unwrap();
+    (surface, folded)
+}
+
 #[test]
 fn self_collision_of_a_folded_cloth_reports_only_real_contacts() {
-    let (flat, folded) = folded_cloth(24, 0.1, -0.02);
-    let mut surface = TrackedSurface::new(flat.clone());
-    surface.set_positions(&folded).unwrap();
+    let (surface, _) = folded_surface();
     let config = TrackerConfig::for_surface(&surface);
     let h = config.thickness;
     let mut tracker = Tracker::new(config);
@@ -204,9 +210,7 @@ fn self_collision_of_a_folded_cloth_reports_only_real_contacts() {
 
 #[test]
 fn a_passed_deadline_cuts_the_search_but_keeps_the_pairs_and_their_contacts_real() {
-    let (flat, folded) = folded_cloth(24, 0.1, -0.02);
-    let mut surface = TrackedSurface::new(flat.clone());
-    surface.set_positions(&folded).unwrap();
+    let (mut surface, folded) = folded_surface();
     let config = TrackerConfig::for_surface(&surface);
     let (h, n) = (config.thickness, config.pairs_per_frame);
     let mut tracker = Tracker::new(config.clone());
