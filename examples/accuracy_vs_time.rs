@@ -174,38 +174,34 @@ fn configs() -> Vec<Config> {
             query: tuned(0.99, 10, 0.0, Budget::NodePairs(n)),
         });
     }
+    // Exact leaves (on by default) undone, the evidence decision (off by default) taken, and
+    // both: what each is worth.
+    let variant = |decision: Decision, exact_leaves: bool| AdbQuery {
+        decision,
+        exact_leaves,
+        ..tuned(0.99, 10, 0.0, Budget::Unlimited)
+    };
+    out.push(Config {
+        label: "calibrated p0.99 k10 estimated-leaves".into(),
+        family: "estimator",
+        query: variant(Decision::Confidence, false),
+    });
+    out.push(Config {
+        label: "calibrated p0.99 k10 evidence".into(),
+        family: "estimator",
+        query: variant(Decision::Evidence, true),
+    });
+    out.push(Config {
+        label: "calibrated p0.99 k10 evidence estimated-leaves".into(),
+        family: "estimator",
+        query: variant(Decision::Evidence, false),
+    });
     out.push(Config {
         label: "planarity p0.99 k10".into(),
         family: "estimator",
         query: AdbQuery {
             estimator: Arc::new(PlanarityEstimator::default()),
-            decision: Decision::Confidence,
             ..AdbQuery::default()
-        },
-    });
-    out.push(Config {
-        label: "calibrated p0.99 k10 early".into(),
-        family: "estimator",
-        query: AdbQuery {
-            decision: Decision::Evidence,
-            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
-        },
-    });
-    out.push(Config {
-        label: "calibrated p0.99 k10 early exact-leaves".into(),
-        family: "estimator",
-        query: AdbQuery {
-            decision: Decision::Evidence,
-            exact_leaves: true,
-            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
-        },
-    });
-    out.push(Config {
-        label: "calibrated p0.99 k10 exact-leaves".into(),
-        family: "estimator",
-        query: AdbQuery {
-            exact_leaves: true,
-            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
         },
     });
     out

@@ -15,11 +15,13 @@
 //! - `exact` (BVH + exact triangle tests). `--solid` also counts a mesh inside a closed other
 //!   mesh as colliding.
 //! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--budget-us T |
-//!   --budget-nodes N] [--exact-leaves] [--early] [--estimator calibrated|paper|planarity]
-//!   [--resolution 4]`; `probability` is the ADB confidence, `nodes_visited` the node pairs
-//!   visited; `--early` stops as soon as the evidence found reaches `p_min`
-//!   (`Decision::Evidence`: faster, more false positives near contact; not with the papers'
-//!   estimator, which keeps their rule).
+//!   --budget-nodes N] [--leaves exact|estimated] [--decision evidence|confidence]
+//!   [--estimator calibrated|paper|planarity] [--resolution 4]`; `probability` is the ADB
+//!   confidence, `nodes_visited` the node pairs visited. `--leaves estimated` never tests a
+//!   triangle (default: leaf pairs are tested exactly); `--decision evidence` stops as soon as
+//!   the evidence found reaches `p_min` (`Decision::Evidence`; default `confidence`: waits for
+//!   `k_min` pieces of evidence). `--estimator paper` is the papers' method as published: their
+//!   decision rule (so no `--decision`) and estimated leaves unless `--leaves exact`.
 //!
 //! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value)
 //! exits with code 2 and one line on stderr naming the file and line.
@@ -40,8 +42,9 @@ use stochastic_collision::mesh::TriMesh;
 use stochastic_collision::poses::read_poses_csv;
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
-[--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--exact-leaves] [--early] \
-[--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
+[--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
+[--decision evidence|confidence] [--estimator calibrated|paper|planarity] [--resolution R] \
+[--out results.csv]";
 
 /// The query modes; each parses its own flags.
 enum Mode {
@@ -72,6 +75,9 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
     let mut resolution = AdbBuildOptions::default().resolution;
     let mut adb_flags: Vec<&'static str> = Vec::new();
     let mut budget_flags = 0;
+    // Set after all flags are read, so that they win over `--estimator paper` in any order.
+    let mut leaves: Option<bool> = None;
+    let mut decision: Option<Decision> = None;
     while let Some(flag) = it.next() {
         let flag = flag
             .into_string()
@@ -118,16 +124,37 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
                 budget_flags += 1;
                 adb_flags.push("--budget-nodes");
             }
-            "--exact-leaves" => {
-                adb.exact_leaves = true;
-                adb_flags.push("--exact-leaves");
+            "--leaves" => {
+                leaves = Some(match value("--leaves")?.as_str() {
+                    "exact" => true,
+                    "estimated" => false,
+                    other => {
+                        return Err(format!(
+                            "--leaves: invalid value `{other}` (known: exact, estimated)"
+                        ));
+                    }
+                });
+                adb_flags.push("--leaves");
             }
-            "--early" => adb_flags.push("--early"),
+            "--decision" => {
+                decision = Some(match value("--decision")?.as_str() {
+                    "evidence" => Decision::Evidence,
+                    "confidence" => Decision::Confidence,
+                    other => {
+                        return Err(format!(
+                            "--decision: invalid value `{other}` (known: evidence, confidence)"
+                        ));
+                    }
+                });
+                adb_flags.push("--decision");
+            }
             "--estimator" => {
                 adb.estimator = match value("--estimator")?.as_str() {
-                    // The papers' method as published, decision rule included.
+                    // The papers' method as published, decision rule and estimated leaves
+                    // included (exact leaves only if asked for).
                     "paper" => {
                         adb.decision = Decision::Paper;
+                        adb.exact_leaves = false;
                         Arc::new(PaperEstimator::default())
                     }
                     "planarity" => Arc::new(PlanarityEstimator::default()),
@@ -153,13 +180,16 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
     if budget_flags > 1 {
         return Err("give at most one of --budget-us and --budget-nodes".to_string());
     }
-    if adb_flags.contains(&"--early") {
+    if let Some(decision) = decision {
         if adb.decision == Decision::Paper {
             return Err(
-                "--early does not apply to --estimator paper (the papers' own rule)".into(),
+                "--decision does not apply to --estimator paper (the papers' own rule)".into(),
             );
         }
-        adb.decision = Decision::Evidence;
+        adb.decision = decision;
+    }
+    if let Some(exact) = leaves {
+        adb.exact_leaves = exact;
     }
     let missing = |name: &str| format!("missing {name}; {USAGE}");
     let mode = match mode.as_deref() {

@@ -96,6 +96,7 @@ fn the_early_decision_stops_no_later_and_only_to_say_collision() {
         for leaves in [false, true] {
             let confidence = AdbQuery {
                 exact_leaves: leaves,
+                decision: Decision::Confidence,
                 ..AdbQuery::default()
             };
             let early = AdbQuery {

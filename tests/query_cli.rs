@@ -242,13 +242,29 @@ fn adb_mode_answers_with_confidences_and_node_budgets_are_repeatable() {
     for (a, b) in x.iter().zip(&y) {
         assert_eq!((&a[1], &a[2], &a[4]), (&b[1], &b[2], &b[4]));
     }
-    // Exact leaves with p_min = 1 answer exactly.
+    // Exact leaves (the default, and asked for with the papers' estimator) with p_min = 1
+    // answer exactly.
     let exact = run(&["--a", m, "--b", m, "--poses", p, "--mode", "exact"]);
     let exact = rows(&exact.stdout);
-    let hybrid = run_adb(&["--exact-leaves", "--p-min", "1"]);
-    for (a, b) in exact.iter().zip(&hybrid) {
-        assert_eq!(a[1], b[1]);
+    for flags in [
+        &["--p-min", "1"][..],
+        &[
+            "--leaves",
+            "exact",
+            "--decision",
+            "evidence",
+            "--p-min",
+            "1",
+        ],
+        &["--estimator", "paper", "--leaves", "exact", "--p-min", "1"],
+        &["--leaves", "exact", "--estimator", "paper", "--p-min", "1"],
+    ] {
+        let hybrid = run_adb(flags);
+        for (a, b) in exact.iter().zip(&hybrid) {
+            assert_eq!(a[1], b[1], "{flags:?}");
+        }
     }
+    assert_eq!(run_adb(&["--leaves", "estimated"]).len(), poses.len());
     for estimator in ["paper", "planarity", "calibrated"] {
         assert_eq!(
             run_adb(&["--estimator", estimator, "--budget-us", "50"]).len(),
@@ -304,12 +320,27 @@ fn adb_flag_errors_exit_2() {
         "--p-min applies to --mode adb only",
     );
     rejects(
-        &with(&["--mode", "exact", "--early"]),
-        "--early applies to --mode adb only",
+        &with(&["--mode", "exact", "--leaves", "exact"]),
+        "--leaves applies to --mode adb only",
     );
     rejects(
-        &with(&["--mode", "adb", "--early", "--estimator", "paper"]),
-        "--early does not apply to --estimator paper",
+        &with(&["--mode", "adb", "--leaves", "some"]),
+        "--leaves: invalid value `some`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--decision", "vote"]),
+        "--decision: invalid value `vote`",
+    );
+    rejects(
+        &with(&[
+            "--mode",
+            "adb",
+            "--decision",
+            "evidence",
+            "--estimator",
+            "paper",
+        ]),
+        "--decision does not apply to --estimator paper",
     );
     rejects(
         &with(&["--mode", "adb", "--budget-us", "1e30"]),

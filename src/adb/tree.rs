@@ -19,9 +19,8 @@ pub struct AdbBuildOptions {
     /// Cells per axis of each node's grid (`resolution³` cells, clamped to 1..=8).
     ///
     /// 4 (64 cells, within the papers' one-byte count) is the default, by measurement (the
-    /// `accuracy_vs_time` report's `--resolution R`): the calibrated error is the same at 2, 4
-    /// and 6, but at 2 the coarse counts make queries several times slower, and 6 is no faster
-    /// than 4 while its build costs more.
+    /// `accuracy_vs_time` report's `--resolution R`): at 2 the coarse counts make the default
+    /// query up to twice as slow, and 6 is no faster than 4 while its build costs more.
     pub resolution: u32,
     /// Fraction of the papers' MaxArea at which a cell counts as well-filled (see
     /// [`CellGrid::with_fill_fraction`]).
