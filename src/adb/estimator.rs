@@ -1,6 +1,6 @@
 //! Pluggable estimators of the probability that two nodes contain intersecting triangles.
 use super::fit::Calibration;
-use super::probability::{cell_counts, depth_lower_bound, node_volume, overlap_volume};
+use super::probability::{ModelBox, cell_counts, depth_lower_bound, overlap_volume_of};
 use super::tables::collision_probability_tabled;
 use super::tree::{AdbNode, AdbTree};
 use crate::bvh::box_test::RelativeFrame;
@@ -42,7 +42,19 @@ impl<'a> NodePair<'a> {
             &a.collision_mesh().bvh().nodes()[ia as usize],
             &b.collision_mesh().bvh().nodes()[ib as usize],
         );
-        let center_distance = frame.center_distance(x, y);
+        Self::at_distance(a, b, frame.center_distance(x, y), ia, ib, calibrated)
+    }
+
+    /// [`between`](Self::between) with the centre distance already known.
+    #[inline]
+    pub(crate) fn at_distance(
+        a: &'a AdbTree,
+        b: &'a AdbTree,
+        center_distance: f32,
+        ia: u32,
+        ib: u32,
+        calibrated: bool,
+    ) -> Self {
         NodePair {
             a: &a.nodes()[ia as usize],
             b: &b.nodes()[ib as usize],
@@ -102,12 +114,13 @@ impl Default for PlanarityEstimator {
 #[inline]
 pub fn eq9_probability(pair: &NodePair<'_>, lb: f64, x_max: u32) -> f64 {
     let (a, b) = (pair.a, pair.b);
-    let v = overlap_volume(a.sides, b.sides, pair.center_distance);
+    let (box_a, box_b) = (ModelBox::new(a.sides), ModelBox::new(b.sides));
+    let v = overlap_volume_of(&box_a, &box_b, pair.center_distance);
     let cells = pair.cells_a.max(pair.cells_b);
     let counts = cell_counts(
         v,
-        node_volume(a.sides),
-        node_volume(b.sides),
+        box_a.volume(),
+        box_b.volume(),
         u32::from(a.well_filled),
         u32::from(b.well_filled),
         cells,
@@ -159,6 +172,8 @@ impl CollisionEstimator for CalibratedEstimator {
     fn probability(&self, pair: &NodePair<'_>) -> f64 {
         let raw = self.base.probability(pair);
         match (pair.calibration_a, pair.calibration_b) {
+            // A mesh against a copy of itself: one map (the mean of two equal values).
+            (Some(a), Some(b)) if std::ptr::eq(a, b) => a.map(pair, raw),
             (Some(a), Some(b)) => 0.5 * (a.map(pair, raw) + b.map(pair, raw)),
             (Some(c), None) | (None, Some(c)) => c.map(pair, raw),
             (None, None) => raw,

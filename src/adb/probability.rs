@@ -194,9 +194,38 @@ pub fn sphere_lens_volume(r1: f64, r2: f64, d: f64) -> f64 {
 /// [`cell_counts`], so that it matches [`overlap_volume`]. 0 only for a box whose sides are all
 /// 0 (or NaN).
 pub fn node_volume(sides: [f32; 3]) -> f64 {
-    let [a, b, c] = thickened_sides(sides);
-    let v = a * b * c;
-    if v.is_nan() { 0.0 } else { v }
+    ModelBox::new(sides).volume()
+}
+
+/// A node box as the probability model sees it: its sides sorted and thickened (as in
+/// [`node_volume`]) and their product, computed once per node of a pair and shared by
+/// [`overlap_volume`] and the two [`node_volume`]s.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct ModelBox {
+    sides: [f64; 3],
+    /// The product of the sides (NaN possible: `node_volume` reads it as 0).
+    product: f64,
+}
+
+impl ModelBox {
+    #[inline]
+    pub(crate) fn new(sides: [f32; 3]) -> Self {
+        let t = thickened_sides(sides);
+        Self {
+            sides: t,
+            product: t[0] * t[1] * t[2],
+        }
+    }
+
+    /// [`node_volume`] of this box.
+    #[inline]
+    pub(crate) fn volume(&self) -> f64 {
+        if self.product.is_nan() {
+            0.0
+        } else {
+            self.product
+        }
+    }
 }
 
 /// The overlap-volume estimate `V̂` used by the model: the box formula
@@ -209,10 +238,14 @@ pub fn node_volume(sides: [f32; 3]) -> f64 {
 /// `≤ min(node_volume(A), node_volume(B))`. The formula only sees the centre distance, so it is
 /// positive for some disjoint boxes: run a real box-overlap test first. Never NaN.
 pub fn overlap_volume(sides_a: [f32; 3], sides_b: [f32; 3], d: f32) -> f64 {
-    let ta = thickened_sides(sides_a);
-    let tb = thickened_sides(sides_b);
-    let va = ta[0] * ta[1] * ta[2];
-    let vb = tb[0] * tb[1] * tb[2];
+    overlap_volume_of(&ModelBox::new(sides_a), &ModelBox::new(sides_b), d)
+}
+
+/// [`overlap_volume`] of two prepared boxes.
+#[inline]
+pub(crate) fn overlap_volume_of(a: &ModelBox, b: &ModelBox, d: f32) -> f64 {
+    let (ta, tb) = (a.sides, b.sides);
+    let (va, vb) = (a.product, b.product);
     let (vmin, vmax) = if va <= vb { (va, vb) } else { (vb, va) };
     if vmin.is_nan() || vmin <= 0.0 {
         return 0.0;

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
-use super::tree::{AdbTree, nodes_overlap};
+use super::tree::{AdbTree, nodes_overlap, overlap_distance};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
 use crate::geometry::{Pose, triangles_intersect};
@@ -293,8 +293,8 @@ pub fn adb_intersects(
             triangles,
         }
     };
-    let pair_probability = |ia: u32, ib: u32| {
-        let pair = NodePair::between(a, b, &frame, ia, ib, true);
+    let pair_probability = |ia: u32, ib: u32, center_distance: f32| {
+        let pair = NodePair::at_distance(a, b, center_distance, ia, ib, true);
         let p = query.estimator.probability(&pair);
         // A NaN from a custom estimator counts as 0 rather than poisoning the confidence.
         if p.is_nan() {
@@ -421,10 +421,10 @@ pub fn adb_intersects(
                 }
                 out.node_pairs_visited += 1;
                 let (cx, cy) = (&na[ia as usize], &nb[ib as usize]);
-                if !nodes_overlap(a, b, &frame, ia, ib) {
+                let Some(center_distance) = overlap_distance(a, b, &frame, ia, ib) else {
                     continue;
-                }
-                let p = pair_probability(ia, ib);
+                };
+                let p = pair_probability(ia, ib, center_distance);
                 if p > out.max_pair_probability {
                     out.max_pair_probability = p;
                 }

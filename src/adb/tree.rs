@@ -293,16 +293,30 @@ pub(crate) fn nodes_overlap(
     ia: u32,
     ib: u32,
 ) -> bool {
+    overlap_distance(a, b, frame, ia, ib).is_some()
+}
+
+/// [`nodes_overlap`], and if they may overlap, the distance between the two boxes' centres
+/// (what the probability model needs), from the same transforms.
+#[inline]
+pub(crate) fn overlap_distance(
+    a: &AdbTree,
+    b: &AdbTree,
+    frame: &RelativeFrame,
+    ia: u32,
+    ib: u32,
+) -> Option<f32> {
     let (x, y) = (
         &a.collision_mesh().bvh().nodes()[ia as usize],
         &b.collision_mesh().bvh().nodes()[ib as usize],
     );
-    if !frame.overlap(x, y) {
-        return false;
-    }
     let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
-    !frame.second_box_outside_slab(y, na.normal, na.slab[0], na.slab[1])
-        && !frame.first_box_outside_slab(x, nb.normal, nb.slab[0], nb.slab[1])
+    frame.overlap_with_slabs(
+        x,
+        y,
+        (na.normal, na.slab[0], na.slab[1]),
+        (nb.normal, nb.slab[0], nb.slab[1]),
+    )
 }
 
 /// Well-filled cell count of every node, over all triangles in or crossing its box.

@@ -47,6 +47,56 @@ impl RelativeFrame {
         }
     }
 
+    /// Whether the boxes may overlap (touching counts) and neither lies outside the other's
+    /// slab (`[normal, lo, hi]` of the first node in the first frame, then of the second in the
+    /// second): the distance between the box centres if they may, `None` if not. The same
+    /// tests as [`overlap`](Self::overlap) and the two slab tests, sharing their transforms.
+    #[inline]
+    pub(crate) fn overlap_with_slabs(
+        &self,
+        a: &BvhNode,
+        b: &BvhNode,
+        slab_a: (Vec3, f32, f32),
+        slab_b: (Vec3, f32, f32),
+    ) -> Option<f32> {
+        let ca = (a.min + a.max) * 0.5;
+        let ea = (a.max - a.min) * 0.5;
+        let cb = (b.min + b.max) * 0.5;
+        let eb = (b.max - b.min) * 0.5;
+        // `b`'s centre in the first frame; `t` exactly as `setup` computes it.
+        let cb_in_a = self.rot * cb + self.translation;
+        let t = cb_in_a - ca;
+        // On overflow (boxes near the limits of the f32 range) the boxes cannot cull, as in
+        // `overlap`; the slabs still may.
+        if t.is_finite() {
+            let ra = ea + self.abs_rot * eb + Vec3::splat(self.margin);
+            if t.abs().cmpgt(ra).any() {
+                return None;
+            }
+            let tb = self.rot_t * t;
+            let rb = eb + self.abs_rot_t * ea + Vec3::splat(self.margin);
+            if tb.abs().cmpgt(rb).any() {
+                return None;
+            }
+        }
+        // The second box against the first node's slab (as `second_box_outside_slab`).
+        let (n, lo, hi) = slab_a;
+        let r = (self.rot_t * n).abs().dot(eb);
+        let d = n.dot(cb_in_a);
+        if d - r > hi + self.margin || d + r < lo - self.margin {
+            return None;
+        }
+        // The first box against the second node's slab (as `first_box_outside_slab`).
+        let (n, lo, hi) = slab_b;
+        let m = self.rot * n;
+        let r = m.abs().dot(ea);
+        let d = m.dot(ca) - m.dot(self.translation);
+        if d - r > hi + self.margin || d + r < lo - self.margin {
+            return None;
+        }
+        Some(t.length())
+    }
+
     /// Centre offset in the first frame, then each box's half extents.
     #[inline]
     fn setup(&self, a: &BvhNode, b: &BvhNode) -> (Vec3, Vec3, Vec3) {
@@ -83,27 +133,6 @@ impl RelativeFrame {
     #[inline]
     pub(crate) fn transform_point(&self, p: Vec3) -> Vec3 {
         self.rot * p + self.translation
-    }
-
-    /// Whether the box `b` (second frame) lies entirely outside the slab
-    /// `{p : lo ≤ n·p ≤ hi}` of the first frame (conservatively: never for a touching box).
-    #[inline]
-    pub(crate) fn second_box_outside_slab(&self, b: &BvhNode, n: Vec3, lo: f32, hi: f32) -> bool {
-        let c = self.rot * ((b.min + b.max) * 0.5) + self.translation;
-        let r = (self.rot_t * n).abs().dot((b.max - b.min) * 0.5);
-        let d = n.dot(c);
-        d - r > hi + self.margin || d + r < lo - self.margin
-    }
-
-    /// Whether the box `a` (first frame) lies entirely outside the slab
-    /// `{p : lo ≤ n·p ≤ hi}` of the second frame (conservatively).
-    #[inline]
-    pub(crate) fn first_box_outside_slab(&self, a: &BvhNode, n: Vec3, lo: f32, hi: f32) -> bool {
-        // p_b = Rᵀ (p_a − t), so n·p_b = (R n)·p_a − (R n)·t.
-        let m = self.rot * n;
-        let r = m.abs().dot((a.max - a.min) * 0.5);
-        let d = m.dot((a.min + a.max) * 0.5) - m.dot(self.translation);
-        d - r > hi + self.margin || d + r < lo - self.margin
     }
 
     /// A lower bound on the distance between the boxes (largest gap along the six axes); 0
