@@ -154,3 +154,74 @@ impl RelativeFrame {
 pub(crate) fn node_size(n: &BvhNode) -> f32 {
     (n.max - n.min).element_sum()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::CollisionMesh;
+    use crate::mesh::generate;
+    use crate::poses::near_contact_poses;
+
+    /// The combined test answers as the box test alone when the slabs are unbounded, with the
+    /// same centre distance; a slab (of either frame) that holds the other box never culls
+    /// it, and one beside it always does.
+    #[test]
+    fn overlap_with_slabs_agrees_with_the_box_test_and_culls_by_slab() {
+        let a = CollisionMesh::new(generate::icosphere(1.0, 3));
+        let b = CollisionMesh::new(generate::torus(1.0, 0.3, 24, 12));
+        let unbounded = (Vec3::ZERO, f32::NEG_INFINITY, f32::INFINITY);
+        let (mut overlapping, mut culled) = (0, 0);
+        for p in near_contact_poses(&a, &b, 8, 0.1, 3) {
+            let frame = RelativeFrame::new(&p.pose, a.bvh(), b.bvh());
+            for x in a.bvh().nodes().iter().take(40) {
+                for y in b.bvh().nodes().iter().take(40) {
+                    let both = frame.overlap_with_slabs(x, y, unbounded, unbounded);
+                    assert_eq!(both.is_some(), frame.overlap(x, y));
+                    let Some(d) = both else { continue };
+                    overlapping += 1;
+                    assert_eq!(d.to_bits(), frame.center_distance(x, y).to_bits());
+                    // `y`'s box along a normal of the first frame: its interval holds the box.
+                    let n = Vec3::new(0.6, 0.0, 0.8);
+                    let corners = (0..8).map(|i| {
+                        let c = Vec3::new(
+                            if i & 1 == 0 { y.min.x } else { y.max.x },
+                            if i & 2 == 0 { y.min.y } else { y.max.y },
+                            if i & 4 == 0 { y.min.z } else { y.max.z },
+                        );
+                        n.dot(frame.transform_point(c))
+                    });
+                    let (lo, hi) = corners.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
+                        (l.min(v), h.max(v))
+                    });
+                    let holding = (n, lo, hi);
+                    assert!(frame.overlap_with_slabs(x, y, holding, unbounded).is_some());
+                    let width = hi - lo + 1.0;
+                    let beside = (n, lo - 2.0 * width, lo - width);
+                    assert!(frame.overlap_with_slabs(x, y, beside, unbounded).is_none());
+                    // The same for `x`'s box against a slab of the second frame.
+                    let corners = (0..8).map(|i| {
+                        let c = Vec3::new(
+                            if i & 1 == 0 { x.min.x } else { x.max.x },
+                            if i & 2 == 0 { x.min.y } else { x.max.y },
+                            if i & 4 == 0 { x.min.z } else { x.max.z },
+                        );
+                        n.dot(frame.rot_t * (c - frame.translation))
+                    });
+                    let (lo, hi) = corners.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
+                        (l.min(v), h.max(v))
+                    });
+                    assert!(
+                        frame
+                            .overlap_with_slabs(x, y, unbounded, (n, lo, hi))
+                            .is_some()
+                    );
+                    let width = hi - lo + 1.0;
+                    let beside = (n, hi + width, hi + 2.0 * width);
+                    assert!(frame.overlap_with_slabs(x, y, unbounded, beside).is_none());
+                    culled += 1;
+                }
+            }
+        }
+        assert!(overlapping > 100 && culled > 100, "{overlapping} {culled}");
+    }
+}
