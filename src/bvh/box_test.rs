@@ -79,14 +79,16 @@ impl RelativeFrame {
                 return None;
             }
         }
-        // The second box against the first node's slab (as `second_box_outside_slab`).
+        // The second box against the first node's slab `{p : lo ≤ n·p ≤ hi}` (first frame):
+        // culled only when its whole interval along `n` lies outside, by more than the margin.
         let (n, lo, hi) = slab_a;
         let r = (self.rot_t * n).abs().dot(eb);
         let d = n.dot(cb_in_a);
         if d - r > hi + self.margin || d + r < lo - self.margin {
             return None;
         }
-        // The first box against the second node's slab (as `first_box_outside_slab`).
+        // The first box against the second node's slab (second frame): `p_b = Rᵀ (p_a − t)`,
+        // so `n·p_b = (R n)·p_a − (R n)·t`.
         let (n, lo, hi) = slab_b;
         let m = self.rot * n;
         let r = m.abs().dot(ea);
