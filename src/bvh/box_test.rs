@@ -66,18 +66,8 @@ impl RelativeFrame {
         // `b`'s centre in the first frame; `t` exactly as `setup` computes it.
         let cb_in_a = self.rot * cb + self.translation;
         let t = cb_in_a - ca;
-        // On overflow (boxes near the limits of the f32 range) the boxes cannot cull, as in
-        // `overlap`; the slabs still may.
-        if t.is_finite() {
-            let ra = ea + self.abs_rot * eb + Vec3::splat(self.margin);
-            if t.abs().cmpgt(ra).any() {
-                return None;
-            }
-            let tb = self.rot_t * t;
-            let rb = eb + self.abs_rot_t * ea + Vec3::splat(self.margin);
-            if tb.abs().cmpgt(rb).any() {
-                return None;
-            }
+        if self.separated(t, ea, eb) {
+            return None;
         }
         // The second box against the first node's slab `{p : lo ≤ n·p ≤ hi}` (first frame):
         // culled only when its whole interval along `n` lies outside, by more than the margin.
@@ -113,16 +103,24 @@ impl RelativeFrame {
     #[inline]
     pub(crate) fn overlap(&self, a: &BvhNode, b: &BvhNode) -> bool {
         let (t, ea, eb) = self.setup(a, b);
+        !self.separated(t, ea, eb)
+    }
+
+    /// Whether one of the six face axes separates boxes of half extents `ea` and `eb` whose
+    /// centres are `t` apart (first frame), by more than the margin. Never on overflow (boxes
+    /// near the limits of the `f32` range): then they cannot be culled.
+    #[inline]
+    fn separated(&self, t: Vec3, ea: Vec3, eb: Vec3) -> bool {
         if !t.is_finite() {
-            return true; // overflow (boxes near the limits of the f32 range): cannot cull
+            return false;
         }
         let ra = ea + self.abs_rot * eb + Vec3::splat(self.margin);
         if t.abs().cmpgt(ra).any() {
-            return false;
+            return true;
         }
         let tb = self.rot_t * t;
         let rb = eb + self.abs_rot_t * ea + Vec3::splat(self.margin);
-        !tb.abs().cmpgt(rb).any()
+        tb.abs().cmpgt(rb).any()
     }
 
     /// Distance between the two boxes' centres.
