@@ -6,6 +6,7 @@ mod plugin_support;
 use bevy_app::App;
 use bevy_ecs::entity::Entity;
 use plugin_support::*;
+use stochastic_collision::adb::Decision;
 use stochastic_collision::ecs::{
     ColliderFrame, CollisionErrorKind, Method, PairOutcomes, TrackingState,
 };
@@ -218,4 +219,27 @@ fn a_collider_swapped_at_rest_is_tested_again_not_answered_from_memory() {
         assert!(ba.intersects(&bb), "the boxes still overlap");
         assert_eq!(log(&app).ended, vec![pair(a, b)], "{fidelity:?}");
     }
+}
+
+#[test]
+fn the_configured_adb_decision_is_the_one_the_queries_use() {
+    // Deeply overlapping balls, estimated leaves: the evidence decision stops as soon as a few
+    // confident pairs carry `p_min`, the confidence decision waits for `k_min` of them.
+    let visited = |decision: Decision| {
+        let config = CollisionConfig {
+            budget: FrameBudget::Unlimited,
+            adb_exact_leaves: false,
+            adb_decision: decision,
+            ..Default::default()
+        };
+        let mut app = app_with(config, 1);
+        spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
+        spawn(&mut app, (ball(1.0), at(1.0, 0.0, 0.0)));
+        app.update();
+        let o = app.world().resource::<PairOutcomes>().outcomes()[0].clone();
+        assert!(o.method == Method::Adb && o.collides, "{decision:?}: {o:?}");
+        o.node_pairs
+    };
+    let (confidence, evidence) = (visited(Decision::Confidence), visited(Decision::Evidence));
+    assert!(evidence < confidence, "{evidence} ≥ {confidence}");
 }

@@ -11,6 +11,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use bevy_app::prelude::*;
+use stochastic_collision::adb::Decision;
 use stochastic_collision::prelude::*;
 
 /// Settings every scene takes (the `profile` command line).
@@ -28,6 +29,8 @@ pub struct Options {
     pub seed: u64,
     /// Fidelity of rigid colliders without their own (default: ADB with `p_min = 0.99`).
     pub fidelity: Option<Fidelity>,
+    /// How ADB queries decide (default: the plugin's).
+    pub adb_decision: Option<Decision>,
 }
 
 impl Default for Options {
@@ -39,6 +42,7 @@ impl Default for Options {
             node_budget: None,
             seed: 1,
             fidelity: None,
+            adb_decision: None,
         }
     }
 }
@@ -56,6 +60,7 @@ impl Options {
             budget,
             seed: self.seed,
             default_fidelity: self.fidelity.unwrap_or(defaults.default_fidelity),
+            adb_decision: self.adb_decision.unwrap_or(defaults.adb_decision),
             ..defaults
         }
     }

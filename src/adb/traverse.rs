@@ -101,9 +101,8 @@ pub enum Decision {
     /// lets weaker pairs count (to never stop on evidence, use `Confidence` with a `k_min` no
     /// traversal can reach). On the `accuracy_vs_time` report's poses, at the same error: with
     /// estimated leaves 1.2–2.4× faster than `Confidence`; with exact leaves within the noise of
-    /// it, and the answer then rests more often on estimates than on an exact leaf hit, so its
-    /// contact is a region, not a triangle pair (in the plugin's pile scene, whose response
-    /// pushes bodies apart along the contacts, the bodies then never settle).
+    /// it (and so in the plugin's pile scene), while an answer given on evidence has a contact
+    /// region, not the triangle pair of an exact leaf hit.
     Evidence,
 }
 

@@ -626,7 +626,6 @@ fn plan_jobs(
         }
         job.last = (old_keys.get(cursor) == Some(&key)).then_some(cursor as u32);
         let memory = job.last.map(|i| &old_memory[i as usize]);
-        // Settled, and neither pose nor geometry changed since: the answer still holds.
         // Settled, asked for the same way, the configuration the same, and neither pose nor
         // geometry changed since: the answer still holds.
         job.cached = !config_changed
@@ -763,6 +762,7 @@ impl Context<'_> {
         AdbQuery {
             k_min: self.config.k_min,
             exact_leaves: self.config.adb_exact_leaves,
+            decision: self.config.adb_decision,
             ..AdbQuery::default()
         }
     }

@@ -21,6 +21,7 @@ use super::tracking_systems::{
     FeaturePairs, TrackingState, forget_untracked, holds_tracking_state, needs_self_pass,
     needs_tracking, prune_feature_pairs, self_collision, track_pairs,
 };
+use crate::adb::Decision;
 
 /// How much work the collision stages (Prepare to Report) may do per run.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,6 +56,11 @@ pub struct CollisionConfig {
     /// certain collision whose contact comes from the triangle pair (a good normal and depth);
     /// without, contacts come from the most probable node pair.
     pub adb_exact_leaves: bool,
+    /// How ADB traversals decide ([`Decision`]). With exact leaves the two rules cost the same
+    /// within the noise (the `accuracy_vs_time` report; the `profile` example's pile with
+    /// `--adb-decision`); [`Decision::Confidence`], the default, more often ends a colliding
+    /// query at an exact leaf hit, whose contact comes from the triangle pair.
+    pub adb_decision: Decision,
     /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
     /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
     /// (the pairs tested were chosen by what a test costs; one cut short would be wasted),
@@ -84,6 +90,7 @@ impl Default for CollisionConfig {
             default_fidelity: Fidelity::Adb { p_min: 0.99 },
             k_min: 10,
             adb_exact_leaves: true,
+            adb_decision: Decision::Confidence,
             min_slice: 4,
             max_slice: 4096,
             seed: 0x5eed,
