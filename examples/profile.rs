@@ -4,14 +4,16 @@
 //! ```text
 //! cargo run --release --example profile -- --scene pile|cannonball|cloth|intestine \
 //!     [--frames N] [--entities N] [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
-//!     [--adb-decision confidence|evidence] [--json out.json] [--svg out.svg]
+//!     [--adb-decision confidence|evidence] [--adb-order evidence-first|best-first] \
+//!     [--json out.json] [--svg out.svg]
 //! ```
 //!
 //! Without `--budget-us` the scene's own budget applies (2000 µs; 30000 µs for the
 //! intestine); `--budget-us 0` means no budget; `--node-budget N` replaces the time budget with a work
 //! budget of N ADB node pairs per frame (deterministic: the same run for any thread count,
 //! which is how to compare thread counts fairly). `--adb-decision` sets how the ADB queries
-//! decide (`CollisionConfig::adb_decision`, default `confidence`).
+//! decide (`CollisionConfig::adb_decision`, default `confidence`), `--adb-order` in which order
+//! they expand node pairs (`CollisionConfig::adb_order`, default `evidence-first`).
 //!
 //! JSON fields: `scene`, `frames`, `threads`, `budget_us`, `stages` (by name: `mean_us`,
 //! `p50_us`, `p99_us` over the frames the stage ran, `runs`), `collision_p99_us` (Prepare to
@@ -28,7 +30,7 @@ use std::time::Instant;
 use plotters::prelude::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
-use stochastic_collision::adb::Decision;
+use stochastic_collision::adb::{Decision, Order};
 use stochastic_collision::bvh::{QueryWorkspace, intersects};
 use stochastic_collision::ecs::{ColliderFrame, ContactQueue, PairOutcomes, Stage};
 use stochastic_collision::prelude::*;
@@ -77,6 +79,17 @@ fn parse() -> Result<Args, String> {
                     }
                 })
             }
+            "--adb-order" => {
+                args.options.adb_order = Some(match value()?.as_str() {
+                    "evidence-first" => Order::EvidenceFirst,
+                    "best-first" => Order::BestFirst,
+                    v => {
+                        return Err(format!(
+                            "--adb-order: unknown `{v}` (evidence-first, best-first)"
+                        ));
+                    }
+                })
+            }
             "--json" => args.json = Some(value()?),
             "--svg" => args.svg = Some(value()?),
             "-h" | "--help" => return Err(String::new()),
@@ -103,7 +116,8 @@ fn main() {
             eprintln!(
                 "{e}\nusage: profile --scene pile|cannonball|cloth|intestine [--frames N] [--entities N] \
                  [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
-                 [--adb-decision confidence|evidence] [--json out.json] [--svg out.svg]"
+                 [--adb-decision confidence|evidence] [--adb-order evidence-first|best-first] \
+                 [--json out.json] [--svg out.svg]"
             );
             std::process::exit(2);
         }

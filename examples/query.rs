@@ -16,12 +16,17 @@
 //!   mesh as colliding.
 //! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--budget-us T |
 //!   --budget-nodes N] [--leaves exact|estimated] [--decision evidence|confidence]
-//!   [--estimator calibrated|paper|planarity] [--resolution 4]`; `probability` is the ADB
-//!   confidence, `nodes_visited` the node pairs visited. `--leaves estimated` never tests a
-//!   triangle (default: leaf pairs are tested exactly); `--decision evidence` stops as soon as
-//!   the evidence found reaches `p_min` (`Decision::Evidence`; default `confidence`: waits for
-//!   `k_min` pieces of evidence). `--estimator paper` is the papers' method as published: their
-//!   decision rule (so no `--decision`) and estimated leaves unless `--leaves exact`.
+//!   [--order evidence-first|best-first] [--estimator calibrated|paper|planarity]
+//!   [--resolution 4]`; `probability` is the ADB confidence, `nodes_visited` the node pairs
+//!   visited. `--leaves estimated` never tests a triangle (default: leaf pairs are tested
+//!   exactly); `--decision evidence` stops as soon as the evidence found reaches `p_min`
+//!   (`Decision::Evidence`; default `confidence`: waits for `k_min` pieces of evidence);
+//!   `--order best-first` expands the most probable pair of the whole queue next (the papers'
+//!   order; default `evidence-first`: the pairs that count as evidence best first, then the
+//!   others depth first, `Order::EvidenceFirst`).
+//!   `--estimator paper` is the papers' method as published: their decision rule (so no
+//!   `--decision`), best-first order and estimated leaves unless `--order` or `--leaves` say
+//!   otherwise.
 //!
 //! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value)
 //! exits with code 2 and one line on stderr naming the file and line.
@@ -33,7 +38,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, CalibratedEstimator, Decision,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, CalibratedEstimator, Decision, Order,
     PaperEstimator, PlanarityEstimator, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, intersects_with};
@@ -43,7 +48,7 @@ use stochastic_collision::poses::read_poses_csv;
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
 [--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
-[--decision evidence|confidence] [--estimator calibrated|paper|planarity] [--resolution R] \
+[--decision evidence|confidence] [--order evidence-first|best-first] [--estimator calibrated|paper|planarity] [--resolution R] \
 [--out results.csv]";
 
 /// The query modes; each parses its own flags.
@@ -78,6 +83,7 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
     // Set after all flags are read, so that they win over `--estimator paper` in any order.
     let mut leaves: Option<bool> = None;
     let mut decision: Option<Decision> = None;
+    let mut order: Option<Order> = None;
     while let Some(flag) = it.next() {
         let flag = flag
             .into_string()
@@ -148,12 +154,25 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
                 });
                 adb_flags.push("--decision");
             }
+            "--order" => {
+                order = Some(match value("--order")?.as_str() {
+                    "evidence-first" => Order::EvidenceFirst,
+                    "best-first" => Order::BestFirst,
+                    other => {
+                        return Err(format!(
+                            "--order: invalid value `{other}` (known: evidence-first, best-first)"
+                        ));
+                    }
+                });
+                adb_flags.push("--order");
+            }
             "--estimator" => {
                 adb.estimator = match value("--estimator")?.as_str() {
-                    // The papers' method as published, decision rule and estimated leaves
-                    // included (exact leaves only if asked for).
+                    // The papers' method as published, decision rule, order and estimated
+                    // leaves included (exact leaves, evidence first only if asked for).
                     "paper" => {
                         adb.decision = Decision::Paper;
+                        adb.order = Order::BestFirst;
                         adb.exact_leaves = false;
                         Arc::new(PaperEstimator::default())
                     }
@@ -190,6 +209,9 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
     }
     if let Some(exact) = leaves {
         adb.exact_leaves = exact;
+    }
+    if let Some(order) = order {
+        adb.order = order;
     }
     let missing = |name: &str| format!("missing {name}; {USAGE}");
     let mode = match mode.as_deref() {

@@ -4,11 +4,11 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, PaperEstimator,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, Order, PaperEstimator,
     PlanarityEstimator, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
-use stochastic_collision::geometry::Pose;
+use stochastic_collision::geometry::{Pose, triangles_intersect};
 use stochastic_collision::mesh::generate;
 use stochastic_collision::poses::near_contact_poses;
 
@@ -40,14 +40,29 @@ fn exact_leaves_with_p_min_one_equal_the_exact_query() {
     let trees = trees();
     for (i, (name, a)) in trees.iter().enumerate() {
         let (_, b) = &trees[(i + 1) % trees.len()];
-        for estimator in [
-            Arc::new(PaperEstimator::default()) as Arc<_>,
-            Arc::new(PlanarityEstimator::default()) as Arc<_>,
+        for (estimator, order) in [
+            (
+                Arc::new(PaperEstimator::default()) as Arc<_>,
+                Order::BestFirst,
+            ),
+            (
+                Arc::new(PaperEstimator::default()) as Arc<_>,
+                Order::EvidenceFirst,
+            ),
+            (
+                Arc::new(PlanarityEstimator::default()) as Arc<_>,
+                Order::BestFirst,
+            ),
+            (
+                Arc::new(PlanarityEstimator::default()) as Arc<_>,
+                Order::EvidenceFirst,
+            ),
         ] {
             let query = AdbQuery {
                 p_min: 1.0,
                 exact_leaves: true,
                 estimator,
+                order,
                 ..AdbQuery::default()
             };
             let poses = near_contact_poses(
@@ -67,7 +82,7 @@ fn exact_leaves_with_p_min_one_equal_the_exact_query() {
                     &mut exact_ws,
                 );
                 let out = adb_intersects(a, &Pose::IDENTITY, b, &p.pose, &query, &mut ws);
-                assert_eq!(out.collides, exact, "{name}: offset {}", p.offset);
+                assert_eq!(out.collides, exact, "{name} {order:?}: offset {}", p.offset);
                 assert_eq!(out.probability, if exact { 1.0 } else { 0.0 });
                 assert!(!out.budget_exhausted);
                 if exact {
@@ -134,9 +149,13 @@ fn node_budget_answers_are_identical_run_to_run_and_respect_the_budget() {
     let (_, a) = &trees[0];
     let (_, b) = &trees[1];
     let poses = near_contact_poses(a.collision_mesh(), b.collision_mesh(), 12, 0.05, 9);
-    for budget in [1u64, 20, 200, 2000] {
+    for (budget, order) in [1u64, 20, 200, 2000]
+        .into_iter()
+        .flat_map(|b| [(b, Order::BestFirst), (b, Order::EvidenceFirst)])
+    {
         let query = AdbQuery {
             budget: Budget::NodePairs(budget),
+            order,
             ..AdbQuery::default()
         };
         let run = || {
@@ -147,7 +166,7 @@ fn node_budget_answers_are_identical_run_to_run_and_respect_the_budget() {
                 .collect::<Vec<_>>()
         };
         let (first, second) = (run(), run());
-        assert_eq!(first, second, "budget {budget}");
+        assert_eq!(first, second, "budget {budget}, {order:?}");
         for o in &first {
             // The budget is checked before each expansion, which visits at most 4 pairs.
             assert!(
@@ -299,5 +318,51 @@ fn a_budget_never_answers_before_looking() {
             &mut ws,
         );
         assert!(o.collides && o.probability == 1.0, "{o:?}");
+    }
+}
+
+/// Both orders, with exact leaves, find every collision of a mesh with its copy near first
+/// contact (deep and shallow), and an answer that ends at an exact hit names a triangle pair
+/// that really intersects.
+#[test]
+fn both_orders_find_every_collision_and_their_hits_are_real() {
+    let trees = trees();
+    let mut ws = AdbWorkspace::new();
+    let mut exact_ws = QueryWorkspace::new();
+    for (name, t) in &trees {
+        let m = t.collision_mesh();
+        let (mut colliding, mut hits) = (0, 0);
+        for p in near_contact_poses(m, m, 24, 0.15, 21) {
+            if !intersects(m, &Pose::IDENTITY, m, &p.pose, &mut exact_ws) {
+                continue;
+            }
+            colliding += 1;
+            for order in [Order::EvidenceFirst, Order::BestFirst] {
+                let query = AdbQuery {
+                    order,
+                    ..AdbQuery::default()
+                };
+                let o = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &query, &mut ws);
+                assert!(o.collides, "{name} {order:?}: missed a collision");
+                let Some(pair) = o.witness.and_then(|w| w.triangles) else {
+                    continue;
+                };
+                hits += 1;
+                let pose = p.pose.to_f64();
+                let tri_a = m.mesh().triangle(pair.a as usize).map(|v| v.as_dvec3());
+                let tri_b = m
+                    .mesh()
+                    .triangle(pair.b as usize)
+                    .map(|v| pose.transform_point(v));
+                assert!(
+                    triangles_intersect(&tri_a, &tri_b),
+                    "{name} {order:?}: witness {pair:?} does not intersect"
+                );
+            }
+        }
+        assert!(
+            colliding >= 5 && hits > 0,
+            "{name}: {colliding} colliding poses, {hits} exact hits"
+        );
     }
 }

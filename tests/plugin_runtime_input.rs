@@ -6,7 +6,7 @@ mod plugin_support;
 use bevy_app::App;
 use bevy_ecs::entity::Entity;
 use plugin_support::*;
-use stochastic_collision::adb::Decision;
+use stochastic_collision::adb::{Decision, Order};
 use stochastic_collision::ecs::{
     ColliderFrame, CollisionErrorKind, Method, PairOutcomes, TrackingState,
 };
@@ -221,25 +221,53 @@ fn a_collider_swapped_at_rest_is_tested_again_not_answered_from_memory() {
     }
 }
 
+/// Node pairs the ADB query of two unit balls `distance` apart visited in one unbudgeted frame
+/// under `config` (which must leave the pair to ADB, and the balls colliding).
+fn adb_node_pairs_of_two_balls(config: CollisionConfig, distance: f32) -> u64 {
+    let config = CollisionConfig {
+        budget: FrameBudget::Unlimited,
+        ..config
+    };
+    let mut app = app_with(config.clone(), 1);
+    spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
+    spawn(&mut app, (ball(1.0), at(distance, 0.0, 0.0)));
+    app.update();
+    let o = app.world().resource::<PairOutcomes>().outcomes()[0].clone();
+    assert!(o.method == Method::Adb && o.collides, "{config:?}: {o:?}");
+    o.node_pairs
+}
+
 #[test]
 fn the_configured_adb_decision_is_the_one_the_queries_use() {
     // Deeply overlapping balls, estimated leaves: the evidence decision stops as soon as a few
     // confident pairs carry `p_min`, the confidence decision waits for `k_min` of them.
-    let visited = |decision: Decision| {
+    let visited = |adb_decision: Decision| {
         let config = CollisionConfig {
-            budget: FrameBudget::Unlimited,
             adb_exact_leaves: false,
-            adb_decision: decision,
+            adb_decision,
             ..Default::default()
         };
-        let mut app = app_with(config, 1);
-        spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
-        spawn(&mut app, (ball(1.0), at(1.0, 0.0, 0.0)));
-        app.update();
-        let o = app.world().resource::<PairOutcomes>().outcomes()[0].clone();
-        assert!(o.method == Method::Adb && o.collides, "{decision:?}: {o:?}");
-        o.node_pairs
+        adb_node_pairs_of_two_balls(config, 1.0)
     };
     let (confidence, evidence) = (visited(Decision::Confidence), visited(Decision::Evidence));
     assert!(evidence < confidence, "{evidence} ≥ {confidence}");
+}
+
+#[test]
+fn the_configured_adb_order_is_the_one_the_queries_use() {
+    // Balls just past first contact, exact leaves: evidence first dives to an intersecting
+    // triangle pair after fewer node pairs than best first, which expands every shallower
+    // pair that looks more likely than the leaves first.
+    let visited = |adb_order: Order| {
+        let config = CollisionConfig {
+            adb_order,
+            ..Default::default()
+        };
+        adb_node_pairs_of_two_balls(config, 1.95)
+    };
+    let (evidence_first, best_first) = (visited(Order::EvidenceFirst), visited(Order::BestFirst));
+    assert!(
+        evidence_first < best_first,
+        "{evidence_first} ≥ {best_first}"
+    );
 }

@@ -258,6 +258,17 @@ fn adb_mode_answers_with_confidences_and_node_budgets_are_repeatable() {
         ],
         &["--estimator", "paper", "--leaves", "exact", "--p-min", "1"],
         &["--leaves", "exact", "--estimator", "paper", "--p-min", "1"],
+        &["--order", "best-first", "--p-min", "1"],
+        &[
+            "--estimator",
+            "paper",
+            "--order",
+            "evidence-first",
+            "--leaves",
+            "exact",
+            "--p-min",
+            "1",
+        ],
     ] {
         let hybrid = run_adb(flags);
         for (a, b) in exact.iter().zip(&hybrid) {
@@ -330,6 +341,14 @@ fn adb_flag_errors_exit_2() {
     rejects(
         &with(&["--mode", "adb", "--decision", "vote"]),
         "--decision: invalid value `vote`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--order", "random"]),
+        "--order: invalid value `random`",
+    );
+    rejects(
+        &with(&["--mode", "exact", "--order", "best-first"]),
+        "--order applies to --mode adb only",
     );
     rejects(
         &with(&[

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use bevy_app::prelude::*;
-use stochastic_collision::adb::Decision;
+use stochastic_collision::adb::{Decision, Order};
 use stochastic_collision::prelude::*;
 
 /// Settings every scene takes (the `profile` command line).
@@ -31,6 +31,8 @@ pub struct Options {
     pub fidelity: Option<Fidelity>,
     /// How ADB queries decide (default: the plugin's).
     pub adb_decision: Option<Decision>,
+    /// `CollisionConfig::adb_order` (None: the default).
+    pub adb_order: Option<Order>,
 }
 
 impl Default for Options {
@@ -43,6 +45,7 @@ impl Default for Options {
             seed: 1,
             fidelity: None,
             adb_decision: None,
+            adb_order: None,
         }
     }
 }
@@ -61,6 +64,7 @@ impl Options {
             seed: self.seed,
             default_fidelity: self.fidelity.unwrap_or(defaults.default_fidelity),
             adb_decision: self.adb_decision.unwrap_or(defaults.adb_decision),
+            adb_order: self.adb_order.unwrap_or(defaults.adb_order),
             ..defaults
         }
     }

@@ -28,6 +28,6 @@ pub use estimator::{
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
 pub use traverse::{
     AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, EVIDENCE_REDUNDANCY,
-    MAX_ESTIMATE, TIME_CHECK_INTERVAL, adb_intersects,
+    MAX_ESTIMATE, Order, TIME_CHECK_INTERVAL, adb_intersects,
 };
 pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};

@@ -763,6 +763,7 @@ impl Context<'_> {
             k_min: self.config.k_min,
             exact_leaves: self.config.adb_exact_leaves,
             decision: self.config.adb_decision,
+            order: self.config.adb_order,
             ..AdbQuery::default()
         }
     }
