@@ -639,6 +639,17 @@ fn cell_count_invariants() {
         let c = cell_counts(v, va, vb, wa, wb, n);
         assert!(c.s_a <= c.s && c.s_b <= c.s && c.s <= n, "{c:?}");
         assert_eq!(c.s == 0, n == 0 || v == 0.0, "{c:?} v={v}");
+        // The definitions, in plain arithmetic: s = round(v / max(V_A, V_B) · n) in [1, n],
+        // s_A = round(w_A · s / n) (halves up) at most s.
+        let vmax = va.max(vb);
+        if v > 0.0 && n > 0 && vmax > 0.0 {
+            let s = (v / vmax * f64::from(n)).round().clamp(1.0, f64::from(n)) as u32;
+            let scaled = |w: u32| {
+                let (w, s, n) = (u128::from(w.min(n)), u128::from(s), u128::from(n));
+                ((2 * w * s + n) / (2 * n)).min(s) as u32
+            };
+            assert_eq!((c.s, c.s_a, c.s_b), (s, scaled(wa), scaled(wb)), "v={v}");
+        }
     }
 }
 

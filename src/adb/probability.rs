@@ -82,13 +82,24 @@ const HEAD_NEGLIGIBLE_LN: f64 = -700.0;
 // ---------------------------------------------------------------------------------------------
 
 /// Sides as `f64`, sorted longest first; NaN and non-positive sides become 0.
+#[inline]
 fn sorted_sides(sides: [f32; 3]) -> [f64; 3] {
-    let mut v = sides.map(|x| if x > 0.0 { f64::from(x) } else { 0.0 });
-    v.sort_unstable_by(|a, b| b.total_cmp(a));
-    v
+    let [mut a, mut b, mut c] = sides.map(|x| if x > 0.0 { f64::from(x) } else { 0.0 });
+    // Three compare-exchanges (no NaN is left to order; this runs twice per node pair).
+    if a < b {
+        std::mem::swap(&mut a, &mut b);
+    }
+    if b < c {
+        std::mem::swap(&mut b, &mut c);
+    }
+    if a < b {
+        std::mem::swap(&mut a, &mut b);
+    }
+    [a, b, c]
 }
 
 /// Sorted sides with every side raised to at least [`MIN_SIDE_RATIO`] × the longest.
+#[inline]
 fn thickened_sides(sides: [f32; 3]) -> [f64; 3] {
     let [a, b, c] = sorted_sides(sides);
     let min = MIN_SIDE_RATIO * a;
@@ -277,9 +288,14 @@ pub struct CellCounts {
 }
 
 /// `round(count · s / cells)` in exact integer arithmetic (halves round up).
+#[inline]
 fn scaled_count(count: u32, s: u32, cells: u32) -> u32 {
     let count = count.min(cells);
-    // The usual case (both below 2^31) fits a u64 and avoids a 128-bit division.
+    // Grids of up to 2^15 cells per node (all the traversal meets: s and count ≤ cells) fit a
+    // u32; larger ones a u64, and beyond 2^31 a 128-bit division.
+    if cells <= 1 << 15 && s <= cells {
+        return ((2 * count * s + cells) / (2 * cells)).min(s);
+    }
     if count < 1 << 31 && s < 1 << 31 {
         let (count, s, cells) = (u64::from(count), u64::from(s), u64::from(cells));
         return ((2 * count * s + cells) / (2 * cells)).min(s) as u32;
@@ -321,8 +337,10 @@ pub fn cell_counts(
     let n = cells_per_node;
     let s = if vmax > 0.0 {
         let cells = overlap_volume / vmax * f64::from(n);
-        // `cells` > 0 here (both operands positive); it may be +inf.
-        cells.round().clamp(1.0, f64::from(n)) as u32
+        // `cells` > 0 here (both operands positive); it may be +inf. Rounded half up by
+        // `+ 0.5` and truncation (saturating: +inf gives u32::MAX), which is `round` for every
+        // value at least 0.5 below 2^52, and below 0.5 both give 1 after the clamp.
+        ((cells + 0.5) as u32).clamp(1, n)
     } else {
         n
     };
