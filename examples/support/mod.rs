@@ -31,7 +31,7 @@ pub struct Options {
     pub fidelity: Option<Fidelity>,
     /// How ADB queries decide (default: the plugin's).
     pub adb_decision: Option<Decision>,
-    /// `CollisionConfig::adb_order` (None: the default).
+    /// In which order ADB queries expand node pairs (default: the plugin's).
     pub adb_order: Option<Order>,
 }
 

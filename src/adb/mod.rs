@@ -9,14 +9,17 @@
 //!   with lookup tables built once per process.
 //! - [`CollisionEstimator`]: the pluggable probability model ([`PaperEstimator`], and
 //!   [`PlanarityEstimator`] whose curvature term comes from the mesh).
-//! - [`adb_intersects`]: the priority-queue traversal with `p_min`, `k_min`, budgets (node pairs
-//!   or time) and optional exact leaves; its [`AdbOutcome`] says whether the meshes collide,
-//!   with what confidence, whether the budget ran out, and where the contact probably is.
+//! - [`adb_intersects`]: the probability-guided traversal (the papers' best-first priority
+//!   queue, or evidence first and then depth first: [`Order`]) with `p_min`, `k_min`, budgets
+//!   (node pairs or time) and optional exact leaves; its [`AdbOutcome`] says whether the meshes
+//!   collide, with what confidence, whether the budget ran out, and where the contact probably
+//!   is.
 
 pub mod cells;
 mod estimator;
 mod fit;
 pub mod probability;
+mod queue;
 pub mod tables;
 mod traverse;
 mod tree;
