@@ -22,11 +22,14 @@
 //! `events_lost` (written but never read by a reader that runs every other frame), `memory`
 //! (resident MiB after a tenth of the run and at the end, and the growth), and
 //! `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms).
+#[path = "support/cli.rs"]
+mod cli;
 mod support;
 
 use std::fmt::Write as _;
 use std::time::Instant;
 
+use cli::parse_choice;
 use plotters::prelude::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -69,26 +72,24 @@ fn parse() -> Result<Args, String> {
             "--node-budget" => args.options.node_budget = Some(num(value()?)?),
             "--seed" => args.options.seed = num(value()?)?,
             "--adb-decision" => {
-                args.options.adb_decision = Some(match value()?.as_str() {
-                    "confidence" => Decision::Confidence,
-                    "evidence" => Decision::Evidence,
-                    v => {
-                        return Err(format!(
-                            "--adb-decision: unknown `{v}` (confidence, evidence)"
-                        ));
-                    }
-                })
+                args.options.adb_decision = Some(parse_choice(
+                    &value()?,
+                    &flag,
+                    &[
+                        ("confidence", Decision::Confidence),
+                        ("evidence", Decision::Evidence),
+                    ],
+                )?)
             }
             "--adb-order" => {
-                args.options.adb_order = Some(match value()?.as_str() {
-                    "evidence-first" => Order::EvidenceFirst,
-                    "best-first" => Order::BestFirst,
-                    v => {
-                        return Err(format!(
-                            "--adb-order: unknown `{v}` (evidence-first, best-first)"
-                        ));
-                    }
-                })
+                args.options.adb_order = Some(parse_choice(
+                    &value()?,
+                    &flag,
+                    &[
+                        ("evidence-first", Order::EvidenceFirst),
+                        ("best-first", Order::BestFirst),
+                    ],
+                )?)
             }
             "--json" => args.json = Some(value()?),
             "--svg" => args.svg = Some(value()?),

@@ -30,6 +30,9 @@
 //!
 //! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value)
 //! exits with code 2 and one line on stderr naming the file and line.
+#[path = "support/cli.rs"]
+mod cli;
+
 use std::ffi::OsString;
 use std::io::Write;
 use std::path::PathBuf;
@@ -45,6 +48,8 @@ use stochastic_collision::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, int
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::TriMesh;
 use stochastic_collision::poses::read_poses_csv;
+
+use cli::parse_choice;
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
 [--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
@@ -131,39 +136,33 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
                 adb_flags.push("--budget-nodes");
             }
             "--leaves" => {
-                leaves = Some(match value("--leaves")?.as_str() {
-                    "exact" => true,
-                    "estimated" => false,
-                    other => {
-                        return Err(format!(
-                            "--leaves: invalid value `{other}` (known: exact, estimated)"
-                        ));
-                    }
-                });
+                leaves = Some(parse_choice(
+                    &value("--leaves")?,
+                    "--leaves",
+                    &[("exact", true), ("estimated", false)],
+                )?);
                 adb_flags.push("--leaves");
             }
             "--decision" => {
-                decision = Some(match value("--decision")?.as_str() {
-                    "evidence" => Decision::Evidence,
-                    "confidence" => Decision::Confidence,
-                    other => {
-                        return Err(format!(
-                            "--decision: invalid value `{other}` (known: evidence, confidence)"
-                        ));
-                    }
-                });
+                decision = Some(parse_choice(
+                    &value("--decision")?,
+                    "--decision",
+                    &[
+                        ("evidence", Decision::Evidence),
+                        ("confidence", Decision::Confidence),
+                    ],
+                )?);
                 adb_flags.push("--decision");
             }
             "--order" => {
-                order = Some(match value("--order")?.as_str() {
-                    "evidence-first" => Order::EvidenceFirst,
-                    "best-first" => Order::BestFirst,
-                    other => {
-                        return Err(format!(
-                            "--order: invalid value `{other}` (known: evidence-first, best-first)"
-                        ));
-                    }
-                });
+                order = Some(parse_choice(
+                    &value("--order")?,
+                    "--order",
+                    &[
+                        ("evidence-first", Order::EvidenceFirst),
+                        ("best-first", Order::BestFirst),
+                    ],
+                )?);
                 adb_flags.push("--order");
             }
             "--estimator" => {

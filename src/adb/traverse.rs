@@ -323,7 +323,6 @@ pub fn adb_intersects(
     let mut frontier_log_miss = 0.0f64;
     // `Decision::Evidence` needs the evidence sum; the other rules only count pairs.
     let count_evidence = query.decision == Decision::Evidence;
-    let mut frontier_len = 0usize;
     // Σ p·point, Σ p·normal, Σ p over the leaf pairs left in the frontier: the contact region.
     let mut region = (Vec3::ZERO, Vec3::ZERO, 0.0f64);
     // The most probable pair, probabilities compared in steps of 1/20 and ties going to the
@@ -361,14 +360,11 @@ pub fn adb_intersects(
             ws.queue.push(e);
             break;
         }
-        if (e.a, e.b) != (0, 0) {
-            frontier_len -= 1;
-            if disjoint_evidence && e.p >= pair_threshold {
-                // Replaced by its children: only disjoint pairs count as evidence.
-                out.pairs_found -= 1;
-                if count_evidence {
-                    evidence += (1.0 - e.p).ln();
-                }
+        if (e.a, e.b) != (0, 0) && disjoint_evidence && e.p >= pair_threshold {
+            // Replaced by its children: only disjoint pairs count as evidence.
+            out.pairs_found -= 1;
+            if count_evidence {
+                evidence += (1.0 - e.p).ln();
             }
         }
         let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
@@ -427,7 +423,6 @@ pub fn adb_intersects(
                 if p > out.max_pair_probability {
                     out.max_pair_probability = p;
                 }
-                frontier_len += 1;
                 let key = witness_key(p, ia, ib);
                 if p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
                     best = Some((key, ia, ib));
@@ -457,13 +452,13 @@ pub fn adb_intersects(
                 } else {
                     // Left in the frontier for good (a leaf pair, or pruned).
                     frontier_log_miss += (1.0 - p).ln();
-                }
-                if !expand && both_leaves && p > 0.0 {
-                    // A leaf pair left in the frontier shapes the contact region.
-                    let w = witness(ia, ib, None);
-                    region.0 += w.point * p as f32;
-                    region.1 += w.normal * p as f32;
-                    region.2 += p;
+                    if both_leaves && p > 0.0 {
+                        // A leaf pair left in the frontier shapes the contact region.
+                        let w = witness(ia, ib, None);
+                        region.0 += w.point * p as f32;
+                        region.1 += w.normal * p as f32;
+                        region.2 += p;
+                    }
                 }
             }
         }
@@ -473,14 +468,11 @@ pub fn adb_intersects(
         }
     }
     if out.probability < 1.0 {
-        let noisy_or = if frontier_len == 0 {
-            0.0
-        } else {
-            // The queued part of the frontier, summed only now: most pairs are expanded, and
-            // a traversal that runs to the end leaves none.
-            let queued: f64 = ws.queue.iter().map(|e| (1.0 - e.p).ln()).sum();
-            1.0 - (frontier_log_miss + queued).exp()
-        };
+        // The queued part of the frontier, summed only now: most pairs are expanded, and a
+        // traversal that runs to the end leaves none (an empty frontier sums to 0: no
+        // collision).
+        let queued: f64 = ws.queue.iter().map(|e| (1.0 - e.p).ln()).sum();
+        let noisy_or = 1.0 - (frontier_log_miss + queued).exp();
         out.probability = noisy_or.clamp(0.0, 1.0);
         if !out.collides {
             out.collides = match query.decision {
