@@ -4,8 +4,8 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, Order, PaperEstimator,
-    PlanarityEstimator, adb_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, CollisionEstimator, Decision, Order,
+    PaperEstimator, PlanarityEstimator, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::geometry::{Pose, triangles_intersect};
@@ -40,24 +40,14 @@ fn exact_leaves_with_p_min_one_equal_the_exact_query() {
     let trees = trees();
     for (i, (name, a)) in trees.iter().enumerate() {
         let (_, b) = &trees[(i + 1) % trees.len()];
-        for (estimator, order) in [
-            (
-                Arc::new(PaperEstimator::default()) as Arc<_>,
-                Order::BestFirst,
-            ),
-            (
-                Arc::new(PaperEstimator::default()) as Arc<_>,
-                Order::EvidenceFirst,
-            ),
-            (
-                Arc::new(PlanarityEstimator::default()) as Arc<_>,
-                Order::BestFirst,
-            ),
-            (
-                Arc::new(PlanarityEstimator::default()) as Arc<_>,
-                Order::EvidenceFirst,
-            ),
-        ] {
+        let estimators: [Arc<dyn CollisionEstimator>; 2] = [
+            Arc::new(PaperEstimator::default()),
+            Arc::new(PlanarityEstimator::default()),
+        ];
+        let cases = estimators.into_iter().flat_map(|estimator| {
+            [Order::BestFirst, Order::EvidenceFirst].map(|order| (estimator.clone(), order))
+        });
+        for (estimator, order) in cases {
             let query = AdbQuery {
                 p_min: 1.0,
                 exact_leaves: true,
