@@ -18,8 +18,11 @@
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh and 600 poses each (the README's figures). Writes
-//! `results.csv`, `summary.csv`, `error_vs_time.svg`, `error_vs_distance.svg` and
-//! `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table.
+//! `results.csv`, `summary.csv`, `outcomes.csv`, `error_vs_time.svg`, `error_vs_distance.svg`
+//! and `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table, the
+//! reliability of the reported probabilities, the issue's targets per mesh (met or not), and
+//! where the time of the exact and the default queries goes on colliding and non-colliding
+//! poses (median time, node pairs, time per node pair: `outcomes.csv`).
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -226,6 +229,16 @@ fn configs() -> Vec<Config> {
 const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
 const PAPER_LABEL: &str = "paper p0.99 k10";
 const BUDGET_20_LABEL: &str = "calibrated p0.99 k10 20us";
+/// The issue's targets: mean error, error near contact (%), the default's median against the
+/// exact query's on meshes of at least `TARGET_RATIO_TRIANGLES` triangles, and the error with
+/// a 20 µs budget (%).
+const TARGET_ERROR: f64 = 2.0;
+const TARGET_NEAR_ERROR: f64 = 5.0;
+const TARGET_RATIO: f64 = 0.25;
+const TARGET_RATIO_TRIANGLES: usize = 30_000;
+const TARGET_BUDGET_ERROR: f64 = 10.0;
+/// The budget of [`BUDGET_20_LABEL`], in µs.
+const BUDGET_20_US: f64 = 20.0;
 
 fn meshes(settings: &Settings) -> Vec<(String, TriMesh)> {
     let shared_dir = std::env::var_os("STOCHASTIC_COLLISION_MESHES")
@@ -299,7 +312,7 @@ fn run_mesh(
     mesh: TriMesh,
     poses: usize,
     build: AdbBuildOptions,
-) -> (Vec<PoseRecord>, f64) {
+) -> (Vec<PoseRecord>, usize) {
     let cm = CollisionMesh::new(mesh);
     let total_nodes = cm.bvh().nodes().len();
     let start = Instant::now();
@@ -383,7 +396,7 @@ fn run_mesh(
             adb: (1..methods).map(|m| median_run(&mut runs[m][i])).collect(),
         })
         .collect();
-    (records, build_s)
+    (records, tris)
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -460,20 +473,35 @@ fn main() {
     }
     let configs = configs();
     let mut all: BTreeMap<String, Vec<PoseRecord>> = BTreeMap::new();
+    let mut triangles: BTreeMap<String, usize> = BTreeMap::new();
     let mut order = Vec::new();
     for (name, mesh) in meshes(&settings) {
-        let (records, _) = run_mesh(&name, mesh, settings.poses, settings.build);
+        let (records, tris) = run_mesh(&name, mesh, settings.poses, settings.build);
         order.push(name.clone());
+        triangles.insert(name.clone(), tris);
         all.insert(name, records);
     }
     if all.is_empty() {
         eprintln!("error: no meshes");
         std::process::exit(2);
     }
-    if let Err(e) = write_outputs(&settings, &configs, &order, &all) {
+    if let Err(e) = write_outputs(&settings, &configs, &order, &all)
+        .and_then(|()| write_targets(&settings, &configs, &order, &all, &triangles))
+    {
         eprintln!("error: cannot write the report: {e}");
         std::process::exit(2);
     }
+}
+
+/// `name` in the output directory, with its header line written.
+fn create_csv(
+    settings: &Settings,
+    name: &str,
+    header: &str,
+) -> std::io::Result<std::io::BufWriter<std::fs::File>> {
+    let mut file = std::io::BufWriter::new(std::fs::File::create(settings.out.join(name))?);
+    writeln!(file, "{header}")?;
+    Ok(file)
 }
 
 fn write_outputs(
@@ -483,10 +511,10 @@ fn write_outputs(
     all: &BTreeMap<String, Vec<PoseRecord>>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     // Raw results.
-    let mut csv = std::io::BufWriter::new(std::fs::File::create(settings.out.join("results.csv"))?);
-    writeln!(
-        csv,
-        "mesh,config,offset,exact,collides,probability,time_ns,nodes_visited"
+    let mut csv = create_csv(
+        settings,
+        "results.csv",
+        "mesh,config,offset,exact,collides,probability,time_ns,nodes_visited",
     )?;
     for name in order {
         for r in &all[name] {
@@ -519,11 +547,10 @@ fn write_outputs(
     csv.flush()?;
 
     // Summary table.
-    let mut summary =
-        std::io::BufWriter::new(std::fs::File::create(settings.out.join("summary.csv"))?);
-    writeln!(
-        summary,
-        "mesh,config,median_us,p99_us,ratio_to_exact,error_pct,false_pos_pct,false_neg_pct,near_error_pct,brier,budget_kept_pct"
+    let mut summary = create_csv(
+        settings,
+        "summary.csv",
+        "mesh,config,median_us,p99_us,ratio_to_exact,error_pct,false_pos_pct,false_neg_pct,near_error_pct,brier,budget_kept_pct",
     )?;
     let mut table = String::new();
     writeln!(
@@ -595,8 +622,98 @@ fn write_outputs(
     plot_error_vs_time(settings, configs, order, all)?;
     plot_error_vs_distance(settings, configs, order, all)?;
     plot_reliability(settings, configs, order, all)?;
+    Ok(())
+}
+
+/// The issue's targets for the default configuration and the 20 µs budget, per mesh, and
+/// where the time of the exact and the default queries goes on colliding and non-colliding
+/// poses (`outcomes.csv`).
+fn write_targets(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+    triangles: &BTreeMap<String, usize>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let index = |label: &str| configs.iter().position(|c| c.label == label);
+    let (Some(default), Some(budget)) = (index(DEFAULT_LABEL), index(BUDGET_20_LABEL)) else {
+        return Ok(());
+    };
+    let mark = |ok: bool| if ok { "met" } else { "NOT met" };
     println!(
-        "wrote results.csv, summary.csv, error_vs_time.svg, error_vs_distance.svg, reliability.svg to {}",
+        "targets (p_min 0.99, k_min 10: error ≤ {TARGET_ERROR} %, ≤ {TARGET_NEAR_ERROR} % near \
+         contact, median ≤ {TARGET_RATIO}× exact from {TARGET_RATIO_TRIANGLES} triangles; \
+         20 µs budget: error ≤ {TARGET_BUDGET_ERROR} %, median ≤ 1.5× the budget):"
+    );
+    for name in order {
+        let records = &all[name];
+        let tris = triangles[name];
+        let exact = stats(records, |r| r.exact);
+        let d = stats(records, |r| r.adb[default]);
+        let b = stats(records, |r| r.adb[budget]);
+        let ratio = d.median_us / exact.median_us;
+        let ratio_note = if tris >= TARGET_RATIO_TRIANGLES {
+            format!("{ratio:.2}× exact ({})", mark(ratio <= TARGET_RATIO))
+        } else {
+            format!("{ratio:.2}× exact (not targeted below {TARGET_RATIO_TRIANGLES} triangles)")
+        };
+        println!(
+            "  {name} ({tris} triangles): default error {:.1} % ({}), near {:.1} % ({}), {ratio_note}; \
+             20 µs: error {:.1} % ({}), median {:.1} µs ({})",
+            d.error,
+            mark(d.error <= TARGET_ERROR),
+            d.near_error,
+            mark(d.near_error <= TARGET_NEAR_ERROR),
+            b.error,
+            mark(b.error <= TARGET_BUDGET_ERROR),
+            b.median_us,
+            mark(b.median_us <= 1.5 * BUDGET_20_US),
+        );
+    }
+
+    // Where the time goes, by the exact answer.
+    let mut csv = create_csv(
+        settings,
+        "outcomes.csv",
+        "mesh,method,outcome,poses,median_us,median_node_pairs,ns_per_node_pair",
+    )?;
+    println!(
+        "by outcome (median time, median node pairs, time per node pair over all poses of the outcome):"
+    );
+    for name in order {
+        let mut line = format!("  {name}:");
+        for (method, pick) in [("exact", None), (DEFAULT_LABEL, Some(default))] {
+            for (outcome, colliding) in [("colliding", true), ("non-colliding", false)] {
+                let answers: Vec<Answer> = all[name]
+                    .iter()
+                    .filter(|r| r.exact.collides == colliding)
+                    .map(|r| pick.map_or(r.exact, |k| r.adb[k]))
+                    .collect();
+                if answers.is_empty() {
+                    continue;
+                }
+                let mut times: Vec<f64> = answers.iter().map(|a| a.time_ns / 1e3).collect();
+                let mut pairs: Vec<f64> = answers.iter().map(|a| a.nodes as f64).collect();
+                let per_pair = answers.iter().map(|a| a.time_ns).sum::<f64>()
+                    / answers.iter().map(|a| a.nodes as f64).sum::<f64>().max(1.0);
+                let (t, n) = (median(&mut times), median(&mut pairs));
+                writeln!(
+                    csv,
+                    "{name},{method},{outcome},{},{t:.3},{n},{per_pair:.1}",
+                    answers.len()
+                )?;
+                let short = if pick.is_none() { "exact" } else { "default" };
+                write!(
+                    line,
+                    " {short} {outcome} {t:.1} µs, {n:.0} pairs, {per_pair:.0} ns/pair;"
+                )?;
+            }
+        }
+        println!("{}", line.trim_end_matches(';'));
+    }
+    csv.flush()?;
+    println!(
+        "wrote results.csv, summary.csv, outcomes.csv, error_vs_time.svg, error_vs_distance.svg, reliability.svg to {}",
         settings.out.display()
     );
     Ok(())
