@@ -20,7 +20,7 @@
 //! `--full`: every shared mesh and 600 poses each (the README's figures). Writes
 //! `results.csv`, `summary.csv`, `outcomes.csv`, `error_vs_time.svg`, `error_vs_distance.svg`
 //! and `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table, the
-//! reliability of the reported probabilities, the targets per mesh (met or not), and
+//! reliability of the reported probabilities, the ADB targets per mesh (met or not), and
 //! where the time of the exact and the default queries goes on colliding and non-colliding
 //! poses (median time, node pairs, time per node pair: `outcomes.csv`).
 use std::collections::BTreeMap;
@@ -229,9 +229,9 @@ fn configs() -> Vec<Config> {
 const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
 const PAPER_LABEL: &str = "paper p0.99 k10";
 const BUDGET_20_LABEL: &str = "calibrated p0.99 k10 20us";
-/// The targets: mean error, error near contact (%), the default's median against the
-/// exact query's on meshes of at least `TARGET_RATIO_TRIANGLES` triangles, and the error with
-/// a 20 µs budget (%).
+/// The ADB targets (README, "ADB-trees: what accuracy costs in time"): mean error and error
+/// near contact (%), the default's median against the exact query's on meshes of at least
+/// `TARGET_RATIO_TRIANGLES` triangles, and the error with a 20 µs budget (%).
 const TARGET_ERROR: f64 = 2.0;
 const TARGET_NEAR_ERROR: f64 = 5.0;
 const TARGET_RATIO: f64 = 0.25;
@@ -625,7 +625,7 @@ fn write_outputs(
     Ok(())
 }
 
-/// The targets for the default configuration and the 20 µs budget, per mesh, and
+/// The ADB targets for the default configuration and the 20 µs budget, per mesh, and
 /// where the time of the exact and the default queries goes on colliding and non-colliding
 /// poses (`outcomes.csv`).
 fn write_targets(
