@@ -29,11 +29,10 @@ mod support;
 use std::fmt::Write as _;
 use std::time::Instant;
 
-use cli::parse_choice;
+use cli::{DECISIONS, ORDERS, parse_choice};
 use plotters::prelude::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
-use stochastic_collision::adb::{Decision, Order};
 use stochastic_collision::bvh::{QueryWorkspace, intersects};
 use stochastic_collision::ecs::{ColliderFrame, ContactQueue, PairOutcomes, Stage};
 use stochastic_collision::prelude::*;
@@ -72,25 +71,9 @@ fn parse() -> Result<Args, String> {
             "--node-budget" => args.options.node_budget = Some(num(value()?)?),
             "--seed" => args.options.seed = num(value()?)?,
             "--adb-decision" => {
-                args.options.adb_decision = Some(parse_choice(
-                    &value()?,
-                    &flag,
-                    &[
-                        ("confidence", Decision::Confidence),
-                        ("evidence", Decision::Evidence),
-                    ],
-                )?)
+                args.options.adb_decision = Some(parse_choice(&value()?, &flag, DECISIONS)?)
             }
-            "--adb-order" => {
-                args.options.adb_order = Some(parse_choice(
-                    &value()?,
-                    &flag,
-                    &[
-                        ("evidence-first", Order::EvidenceFirst),
-                        ("best-first", Order::BestFirst),
-                    ],
-                )?)
-            }
+            "--adb-order" => args.options.adb_order = Some(parse_choice(&value()?, &flag, ORDERS)?),
             "--json" => args.json = Some(value()?),
             "--svg" => args.svg = Some(value()?),
             "-h" | "--help" => return Err(String::new()),

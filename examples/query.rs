@@ -49,7 +49,7 @@ use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::TriMesh;
 use stochastic_collision::poses::read_poses_csv;
 
-use cli::parse_choice;
+use cli::{DECISIONS, ORDERS, parse_choice};
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
 [--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
@@ -147,22 +147,12 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
                 decision = Some(parse_choice(
                     &value("--decision")?,
                     "--decision",
-                    &[
-                        ("evidence", Decision::Evidence),
-                        ("confidence", Decision::Confidence),
-                    ],
+                    DECISIONS,
                 )?);
                 adb_flags.push("--decision");
             }
             "--order" => {
-                order = Some(parse_choice(
-                    &value("--order")?,
-                    "--order",
-                    &[
-                        ("evidence-first", Order::EvidenceFirst),
-                        ("best-first", Order::BestFirst),
-                    ],
-                )?);
+                order = Some(parse_choice(&value("--order")?, "--order", ORDERS)?);
                 adb_flags.push("--order");
             }
             "--estimator" => {

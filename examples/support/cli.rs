@@ -1,4 +1,17 @@
 //! Command-line helpers shared by the examples that take named choices (`query`, `profile`).
+use stochastic_collision::adb::{Decision, Order};
+
+/// The names of the ADB decisions a command line may choose (`--decision`, `--adb-decision`).
+pub const DECISIONS: &[(&str, Decision)] = &[
+    ("confidence", Decision::Confidence),
+    ("evidence", Decision::Evidence),
+];
+
+/// The names of the ADB traversal orders (`--order`, `--adb-order`).
+pub const ORDERS: &[(&str, Order)] = &[
+    ("evidence-first", Order::EvidenceFirst),
+    ("best-first", Order::BestFirst),
+];
 
 /// The value of `flag` among the `known` names, or an error naming them.
 pub fn parse_choice<T: Copy>(value: &str, flag: &str, known: &[(&str, T)]) -> Result<T, String> {
