@@ -162,6 +162,21 @@ mod tests {
     use crate::mesh::generate;
     use crate::poses::near_contact_poses;
 
+    /// The range of `along` over the eight corners of `node`'s box.
+    fn interval(node: &BvhNode, along: impl Fn(Vec3) -> f32) -> (f32, f32) {
+        (0..8)
+            .map(|i| {
+                along(Vec3::new(
+                    if i & 1 == 0 { node.min.x } else { node.max.x },
+                    if i & 2 == 0 { node.min.y } else { node.max.y },
+                    if i & 4 == 0 { node.min.z } else { node.max.z },
+                ))
+            })
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
+                (l.min(v), h.max(v))
+            })
+    }
+
     /// The combined test answers as the box test alone when the slabs are unbounded, with the
     /// same centre distance; a slab (of either frame) that holds the other box never culls
     /// it, and one beside it always does.
@@ -182,34 +197,14 @@ mod tests {
                     assert_eq!(d.to_bits(), frame.center_distance(x, y).to_bits());
                     // `y`'s box along a normal of the first frame: its interval holds the box.
                     let n = Vec3::new(0.6, 0.0, 0.8);
-                    let corners = (0..8).map(|i| {
-                        let c = Vec3::new(
-                            if i & 1 == 0 { y.min.x } else { y.max.x },
-                            if i & 2 == 0 { y.min.y } else { y.max.y },
-                            if i & 4 == 0 { y.min.z } else { y.max.z },
-                        );
-                        n.dot(frame.transform_point(c))
-                    });
-                    let (lo, hi) = corners.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
-                        (l.min(v), h.max(v))
-                    });
+                    let (lo, hi) = interval(y, |c| n.dot(frame.transform_point(c)));
                     let holding = (n, lo, hi);
                     assert!(frame.overlap_with_slabs(x, y, holding, unbounded).is_some());
                     let width = hi - lo + 1.0;
                     let beside = (n, lo - 2.0 * width, lo - width);
                     assert!(frame.overlap_with_slabs(x, y, beside, unbounded).is_none());
                     // The same for `x`'s box against a slab of the second frame.
-                    let corners = (0..8).map(|i| {
-                        let c = Vec3::new(
-                            if i & 1 == 0 { x.min.x } else { x.max.x },
-                            if i & 2 == 0 { x.min.y } else { x.max.y },
-                            if i & 4 == 0 { x.min.z } else { x.max.z },
-                        );
-                        n.dot(frame.rot_t * (c - frame.translation))
-                    });
-                    let (lo, hi) = corners.fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
-                        (l.min(v), h.max(v))
-                    });
+                    let (lo, hi) = interval(x, |c| n.dot(frame.rot_t * (c - frame.translation)));
                     assert!(
                         frame
                             .overlap_with_slabs(x, y, unbounded, (n, lo, hi))
