@@ -3,7 +3,6 @@ use super::fit::Calibration;
 use super::probability::{ModelBox, cell_counts, depth_lower_bound, overlap_volume_of};
 use super::tables::collision_probability_tabled;
 use super::tree::{AdbNode, AdbTree};
-use crate::bvh::box_test::RelativeFrame;
 
 /// Everything an estimator may use about one pair of overlapping nodes.
 #[derive(Debug, Clone, Copy)]
@@ -29,23 +28,8 @@ pub struct NodePair<'a> {
 }
 
 impl<'a> NodePair<'a> {
-    /// The pair of node `ia` of `a` and node `ib` of `b`, `frame` placing `b` in `a`'s frame.
-    pub(crate) fn between(
-        a: &'a AdbTree,
-        b: &'a AdbTree,
-        frame: &RelativeFrame,
-        ia: u32,
-        ib: u32,
-        calibrated: bool,
-    ) -> Self {
-        let (x, y) = (
-            &a.collision_mesh().bvh().nodes()[ia as usize],
-            &b.collision_mesh().bvh().nodes()[ib as usize],
-        );
-        Self::at_distance(a, b, frame.center_distance(x, y), ia, ib, calibrated)
-    }
-
-    /// [`between`](Self::between) with the centre distance already known.
+    /// The pair of node `ia` of `a` and node `ib` of `b` whose boxes' centres are
+    /// `center_distance` apart.
     #[inline]
     pub(crate) fn at_distance(
         a: &'a AdbTree,

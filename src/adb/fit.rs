@@ -7,7 +7,7 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
 use super::estimator::{CollisionEstimator, NodePair};
-use super::tree::{AdbTree, nodes_overlap};
+use super::tree::{AdbTree, nodes_overlap, overlap_distance};
 use crate::bvh::QueryWorkspace;
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::traverse_pair::subtrees_intersect;
@@ -111,11 +111,11 @@ impl FittedEstimator {
                 let (mut ia, mut ib) = (0u32, 0u32);
                 loop {
                     let (x, y) = (&na[ia as usize], &nb[ib as usize]);
-                    if !nodes_overlap(a, b, &frame, ia, ib) {
+                    let Some(center_distance) = overlap_distance(a, b, &frame, ia, ib) else {
                         break;
-                    }
+                    };
                     if (ia, ib) != (0, 0) {
-                        let pair = NodePair::between(a, b, &frame, ia, ib, false);
+                        let pair = NodePair::at_distance(a, b, center_distance, ia, ib, false);
                         let raw = base.probability(&pair).clamp(0.0, 1.0);
                         let truth = subtrees_intersect(ma, mb, &rel, ia, ib, &mut ws);
                         let cell = &mut counts[bucket(&pair)][raw_bin(raw)];

@@ -123,12 +123,6 @@ impl RelativeFrame {
         tb.abs().cmpgt(rb).any()
     }
 
-    /// Distance between the two boxes' centres.
-    #[inline]
-    pub(crate) fn center_distance(&self, a: &BvhNode, b: &BvhNode) -> f32 {
-        self.setup(a, b).0.length()
-    }
-
     /// The second frame's rotation and translation in the first frame.
     #[inline]
     pub(crate) fn transform_point(&self, p: Vec3) -> Vec3 {
@@ -194,7 +188,7 @@ mod tests {
                     assert_eq!(both.is_some(), frame.overlap(x, y));
                     let Some(d) = both else { continue };
                     overlapping += 1;
-                    assert_eq!(d.to_bits(), frame.center_distance(x, y).to_bits());
+                    assert_eq!(d.to_bits(), frame.setup(x, y).0.length().to_bits());
                     // `y`'s box along a normal of the first frame: its interval holds the box.
                     let n = Vec3::new(0.6, 0.0, 0.8);
                     let (lo, hi) = interval(y, |c| n.dot(frame.transform_point(c)));
