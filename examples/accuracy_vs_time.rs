@@ -23,7 +23,7 @@
 //! reliability of the reported probabilities, the ADB targets per mesh (met or not), where
 //! the time of the exact and the default queries goes on colliding and non-colliding poses
 //! (median time, node pairs, time per node pair: `outcomes.csv`), and the oracle bound: what
-//! a traversal that always descended straight to an intersecting triangle pair would take
+//! a traversal that went straight down to the nearest intersecting triangle pair would take
 //! (`support/oracle_descent.rs`; also in `outcomes.csv`).
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -46,7 +46,7 @@ use stochastic_collision::poses::near_contact_poses;
 
 #[path = "support/oracle_descent.rs"]
 mod oracle_descent;
-use oracle_descent::{SubtreeRanges, oracle_descent_pairs};
+use oracle_descent::{LeafDepths, oracle_descent_pairs};
 
 /// Offsets from first contact are drawn uniformly in ±SPREAD × size.
 const SPREAD: f32 = 0.15;
@@ -395,7 +395,7 @@ fn run_mesh(
         pose_runs.sort_by(|x, y| x.time_ns.total_cmp(&y.time_ns));
         pose_runs[pose_runs.len() / 2]
     };
-    let ranges = SubtreeRanges::new(cm);
+    let depths = LeafDepths::new(cm);
     let mut hits = Vec::new();
     let records = approach
         .iter()
@@ -405,8 +405,8 @@ fn run_mesh(
             exact: median_run(&mut runs[0][i]),
             adb: (1..methods).map(|m| median_run(&mut runs[m][i])).collect(),
             oracle_pairs: oracle_descent_pairs(
-                (cm, &ranges),
-                (cm, &ranges),
+                (cm, &depths),
+                (cm, &depths),
                 &p.pose,
                 &mut exact_ws,
                 &mut hits,
@@ -642,8 +642,10 @@ fn write_outputs(
     Ok(())
 }
 
-/// What no ordering of a traversal that answers "collision" from a triangle test can beat, by
-/// [`oracle_descent_pairs`].
+/// The best median a traversal that answers "collision" from a triangle test could reach by its
+/// order alone: on colliding poses the node pairs of [`oracle_descent_pairs`] (fewer than any
+/// such traversal visits) at the exact query's lowest time per node pair, non-colliding poses
+/// as fast as the faster of the measured exact and default queries.
 struct OracleBound {
     /// Colliding poses.
     colliding: usize,
@@ -797,9 +799,9 @@ fn write_targets(
         println!("{}", line.trim_end_matches(';'));
     }
     println!(
-        "oracle bound (colliding poses: a descent that always steps into a child pair holding an \
-         intersection, at the lower of the exact query's times per node pair; non-colliding \
-         poses: the faster of the exact and default queries):"
+        "oracle bound (colliding poses: a descent straight to the nearest intersecting triangle \
+         pair, at the lower of the exact query's times per node pair; non-colliding poses: the \
+         faster of the exact and default queries):"
     );
     for name in order {
         let Some(o) = oracle_bound(&all[name], default) else {

@@ -93,7 +93,7 @@ pub enum Order {
     /// most probable child of the pair just expanded first (a stack): a collision near first
     /// contact reaches leaf pairs, and with exact leaves its first intersecting triangle pair,
     /// after far fewer node pairs than best first. The default: on the `accuracy_vs_time`
-    /// report's poses 1.1–2.3× faster than [`Order::BestFirst`] with exact leaves, at the same
+    /// report's poses 1.1–2.4× faster than [`Order::BestFirst`] with exact leaves, at the same
     /// error (the README).
     #[default]
     EvidenceFirst,
