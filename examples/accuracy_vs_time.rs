@@ -723,6 +723,10 @@ fn write_targets(
         return Ok(());
     };
     let mark = |ok: bool| if ok { "met" } else { "NOT met" };
+    let bounds: BTreeMap<&String, OracleBound> = order
+        .iter()
+        .filter_map(|name| Some((name, oracle_bound(&all[name], default)?)))
+        .collect();
     println!(
         "targets (p_min 0.99, k_min 10: error ≤ {TARGET_ERROR} %, ≤ {TARGET_NEAR_ERROR} % near \
          contact, median ≤ {TARGET_RATIO}× exact from {TARGET_RATIO_TRIANGLES} triangles; \
@@ -735,7 +739,7 @@ fn write_targets(
         let d = stats(records, |r| r.adb[default]);
         let b = stats(records, |r| r.adb[budget]);
         let ratio = d.median_us / exact.median_us;
-        let bound = oracle_bound(records, default).map_or(String::new(), |o| {
+        let bound = bounds.get(name).map_or(String::new(), |o| {
             format!(", oracle bound {:.2}×", o.median_us / exact.median_us)
         });
         let ratio_note = if tris >= TARGET_RATIO_TRIANGLES {
@@ -804,7 +808,7 @@ fn write_targets(
          faster of the exact and default queries):"
     );
     for name in order {
-        let Some(o) = oracle_bound(&all[name], default) else {
+        let Some(o) = bounds.get(name) else {
             continue;
         };
         let exact = stats(&all[name], |r| r.exact);

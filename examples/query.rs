@@ -53,8 +53,8 @@ use cli::{DECISIONS, ORDERS, parse_choice};
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
 [--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
-[--decision evidence|confidence] [--order evidence-first|best-first] [--estimator calibrated|paper|planarity] [--resolution R] \
-[--out results.csv]";
+[--decision evidence|confidence] [--order evidence-first|best-first] \
+[--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
 
 /// The query modes; each parses its own flags.
 enum Mode {
