@@ -17,13 +17,13 @@
 //! ```
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
-//! `--full`: every shared mesh and 600 poses each (the README's figures). Writes
-//! `results.csv`, `summary.csv`, `outcomes.csv`, `error_vs_time.svg`, `error_vs_distance.svg`
-//! and `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table, the
-//! reliability of the reported probabilities, the ADB targets per mesh (met or not), where
-//! the time of the exact and the default queries goes on colliding and non-colliding poses
-//! (median time, node pairs, time per node pair: `outcomes.csv`), and the oracle bound: what
-//! a traversal that went straight down to the nearest intersecting triangle pair would take
+//! `--full`: every shared mesh, 600 poses each (the README's figures: `--full --poses 300`). Writes
+//! `results.csv`, `summary.csv`, `outcomes.csv`, `error_vs_time.svg`, `error_vs_distance.svg` and
+//! `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table, the
+//! reliability of the reported probabilities, the ADB targets per mesh (met or not), where the time
+//! of the exact and the default queries goes on colliding and non-colliding poses (median time,
+//! node pairs, time per node pair: `outcomes.csv`), and the oracle bound: what a traversal that
+//! went straight down to the nearest intersecting triangle pair would take
 //! (`support/oracle_descent.rs`; also in `outcomes.csv`).
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
