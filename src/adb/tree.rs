@@ -310,13 +310,13 @@ pub(crate) fn overlap_distance(
         &a.collision_mesh().bvh().nodes()[ia as usize],
         &b.collision_mesh().bvh().nodes()[ib as usize],
     );
-    let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
-    frame.overlap_with_slabs(
-        x,
-        y,
-        (na.normal, na.slab[0], na.slab[1]),
-        (nb.normal, nb.slab[0], nb.slab[1]),
-    )
+    frame.overlap_with_slabs(x, y, || {
+        let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
+        (
+            (na.normal, na.slab[0], na.slab[1]),
+            (nb.normal, nb.slab[0], nb.slab[1]),
+        )
+    })
 }
 
 /// Well-filled cell count of every node, over all triangles in or crossing its box.

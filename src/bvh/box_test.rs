@@ -48,16 +48,16 @@ impl RelativeFrame {
     }
 
     /// Whether the boxes may overlap (touching counts) and neither lies outside the other's
-    /// slab (`[normal, lo, hi]` of the first node in the first frame, then of the second in the
-    /// second): the distance between the box centres if they may, `None` if not. The same
-    /// tests as [`overlap`](Self::overlap) and the two slab tests, sharing their transforms.
+    /// slab (`slabs` gives `[normal, lo, hi]` of the first node in the first frame, then of the
+    /// second in the second; called only once the boxes overlap, so a culled pair never loads
+    /// them): the distance between the box centres if they may, `None` if not. The same tests
+    /// as [`overlap`](Self::overlap) and the two slab tests, sharing their transforms.
     #[inline]
     pub(crate) fn overlap_with_slabs(
         &self,
         a: &BvhNode,
         b: &BvhNode,
-        slab_a: (Vec3, f32, f32),
-        slab_b: (Vec3, f32, f32),
+        slabs: impl FnOnce() -> ((Vec3, f32, f32), (Vec3, f32, f32)),
     ) -> Option<f32> {
         let ca = (a.min + a.max) * 0.5;
         let ea = (a.max - a.min) * 0.5;
@@ -69,6 +69,7 @@ impl RelativeFrame {
         if self.separated(t, ea, eb) {
             return None;
         }
+        let (slab_a, slab_b) = slabs();
         // The second box against the first node's slab `{p : lo ≤ n·p ≤ hi}` (first frame):
         // culled only when its whole interval along `n` lies outside, by more than the margin.
         let (n, lo, hi) = slab_a;
@@ -109,7 +110,7 @@ impl RelativeFrame {
     /// Whether one of the six face axes separates boxes of half extents `ea` and `eb` whose
     /// centres are `t` apart (first frame), by more than the margin. Never on overflow (boxes
     /// near the limits of the `f32` range): then they cannot be culled.
-    #[inline]
+    #[inline(always)]
     fn separated(&self, t: Vec3, ea: Vec3, eb: Vec3) -> bool {
         if !t.is_finite() {
             return false;
@@ -184,7 +185,7 @@ mod tests {
             let frame = RelativeFrame::new(&p.pose, a.bvh(), b.bvh());
             for x in a.bvh().nodes().iter().take(40) {
                 for y in b.bvh().nodes().iter().take(40) {
-                    let both = frame.overlap_with_slabs(x, y, unbounded, unbounded);
+                    let both = frame.overlap_with_slabs(x, y, || (unbounded, unbounded));
                     assert_eq!(both.is_some(), frame.overlap(x, y));
                     let Some(d) = both else { continue };
                     overlapping += 1;
@@ -193,20 +194,32 @@ mod tests {
                     let n = Vec3::new(0.6, 0.0, 0.8);
                     let (lo, hi) = interval(y, |c| n.dot(frame.transform_point(c)));
                     let holding = (n, lo, hi);
-                    assert!(frame.overlap_with_slabs(x, y, holding, unbounded).is_some());
+                    assert!(
+                        frame
+                            .overlap_with_slabs(x, y, || (holding, unbounded))
+                            .is_some()
+                    );
                     let width = hi - lo + 1.0;
                     let beside = (n, lo - 2.0 * width, lo - width);
-                    assert!(frame.overlap_with_slabs(x, y, beside, unbounded).is_none());
+                    assert!(
+                        frame
+                            .overlap_with_slabs(x, y, || (beside, unbounded))
+                            .is_none()
+                    );
                     // The same for `x`'s box against a slab of the second frame.
                     let (lo, hi) = interval(x, |c| n.dot(frame.rot_t * (c - frame.translation)));
                     assert!(
                         frame
-                            .overlap_with_slabs(x, y, unbounded, (n, lo, hi))
+                            .overlap_with_slabs(x, y, || (unbounded, (n, lo, hi)))
                             .is_some()
                     );
                     let width = hi - lo + 1.0;
                     let beside = (n, hi + width, hi + 2.0 * width);
-                    assert!(frame.overlap_with_slabs(x, y, unbounded, beside).is_none());
+                    assert!(
+                        frame
+                            .overlap_with_slabs(x, y, || (unbounded, beside))
+                            .is_none()
+                    );
                     culled += 1;
                 }
             }
