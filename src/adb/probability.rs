@@ -332,7 +332,8 @@ pub fn cell_counts(
     if cells_per_node == 0 || overlap_volume.is_nan() || overlap_volume <= 0.0 {
         return CellCounts::default();
     }
-    let clean = |v: f64| if v > 0.0 && v.is_finite() { v } else { 0.0 };
+    // Positive and finite, else 0 (two comparisons: NaN fails both).
+    let clean = |v: f64| if v > 0.0 && v < f64::INFINITY { v } else { 0.0 };
     let vmax = clean(volume_a).max(clean(volume_b));
     let n = cells_per_node;
     let s = if vmax > 0.0 {

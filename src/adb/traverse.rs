@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
 use super::queue::{Entry, Queue};
-use super::tree::{AdbTree, nodes_overlap, overlap_distance};
+use super::tree::{AdbTree, nodes_overlap, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
 use crate::geometry::{Pose, triangles_intersect};
@@ -406,17 +406,22 @@ pub fn adb_intersects(
         // Set when k_min pairs (or enough evidence) are found: the children estimated so far
         // are queued, so that the frontier is complete, then the traversal ends.
         let mut found = false;
-        'children: for ia in children(x, e.a) {
+        // Each child prepared once for its (up to) two box tests.
+        let (kids_a, kids_b) = (children(x, e.a), children(y, e.b));
+        let prepare = |ib: u32| (ib != u32::MAX).then(|| prepare_second(b, &frame, ib));
+        let prepared_b = [prepare(kids_b[0]), prepare(kids_b[1])];
+        'children: for ia in kids_a {
             if ia == u32::MAX {
                 continue;
             }
-            for ib in children(y, e.b) {
-                if ib == u32::MAX {
+            let first = prepare_first(a, &frame, ia);
+            for (&ib, second) in kids_b.iter().zip(&prepared_b) {
+                let Some(second) = second else {
                     continue;
-                }
+                };
                 out.node_pairs_visited += 1;
                 let (cx, cy) = (&na[ia as usize], &nb[ib as usize]);
-                let Some(center_distance) = overlap_distance(a, b, &frame, ia, ib) else {
+                let Some(center_distance) = frame.overlap_prepared(&first, second) else {
                     continue;
                 };
                 let p = pair_probability(ia, ib, center_distance);

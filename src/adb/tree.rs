@@ -10,7 +10,7 @@ use super::cells::{CellGrid, CellScratch, count_well_filled};
 use super::estimator::PlanarityEstimator;
 use super::fit::{Calibration, FitOptions, FittedEstimator};
 use crate::bvh::CollisionMesh;
-use crate::bvh::box_test::RelativeFrame;
+use crate::bvh::box_test::{FirstBox, RelativeFrame, SecondBox};
 use crate::geometry::Aabb;
 
 /// Options of [`AdbTree::build_with`].
@@ -310,13 +310,35 @@ pub(crate) fn overlap_distance(
         &a.collision_mesh().bvh().nodes()[ia as usize],
         &b.collision_mesh().bvh().nodes()[ib as usize],
     );
-    frame.overlap_with_slabs(x, y, || {
-        let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
-        (
-            (na.normal, na.slab[0], na.slab[1]),
-            (nb.normal, nb.slab[0], nb.slab[1]),
-        )
-    })
+    let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
+    frame.overlap_with_slabs(
+        x,
+        y,
+        (na.normal, na.slab[0], na.slab[1]),
+        (nb.normal, nb.slab[0], nb.slab[1]),
+    )
+}
+
+/// Node `ia` of the first tree with its slab, prepared for box and slab tests
+/// against several nodes of the second (`RelativeFrame::overlap_prepared`).
+#[inline]
+pub(crate) fn prepare_first(a: &AdbTree, frame: &RelativeFrame, ia: u32) -> FirstBox {
+    let n = &a.nodes()[ia as usize];
+    frame.prepare_first(
+        &a.collision_mesh().bvh().nodes()[ia as usize],
+        (n.normal, n.slab[0], n.slab[1]),
+    )
+}
+
+/// Node `ib` of the second tree with its slab, prepared for box and slab tests
+/// against several nodes of the first (`RelativeFrame::overlap_prepared`).
+#[inline]
+pub(crate) fn prepare_second(b: &AdbTree, frame: &RelativeFrame, ib: u32) -> SecondBox {
+    let n = &b.nodes()[ib as usize];
+    frame.prepare_second(
+        &b.collision_mesh().bvh().nodes()[ib as usize],
+        (n.normal, n.slab[0], n.slab[1]),
+    )
 }
 
 /// Well-filled cell count of every node, over all triangles in or crossing its box.

@@ -20,6 +20,33 @@ pub(crate) struct RelativeFrame {
     margin: f32,
 }
 
+/// A node of the first tree prepared for box tests ([`RelativeFrame::prepare_first`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FirstBox {
+    center: Vec3,
+    half: Vec3,
+    /// `|Rᵀ| half`: the half extents' reach along the second frame's axes.
+    half_in_second: Vec3,
+    normal: Vec3,
+    /// `|Rᵀ n|`.
+    normal_in_second: Vec3,
+    slab: [f32; 2],
+}
+
+/// A node of the second tree prepared for box tests ([`RelativeFrame::prepare_second`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SecondBox {
+    center_in_first: Vec3,
+    half: Vec3,
+    /// `|R| half`: the half extents' reach along the first frame's axes.
+    half_in_first: Vec3,
+    /// `R n`.
+    normal_in_first: Vec3,
+    /// `(R n)·t`.
+    normal_offset: f32,
+    slab: [f32; 2],
+}
+
 impl RelativeFrame {
     /// `rel` maps the second tree's frame into the first's.
     pub(crate) fn new(rel: &Pose, a: &Bvh, b: &Bvh) -> Self {
@@ -48,42 +75,79 @@ impl RelativeFrame {
     }
 
     /// Whether the boxes may overlap (touching counts) and neither lies outside the other's
-    /// slab (`slabs` gives `[normal, lo, hi]` of the first node in the first frame, then of the
-    /// second in the second; called only once the boxes overlap, so a culled pair never loads
-    /// them): the distance between the box centres if they may, `None` if not. The same tests
-    /// as [`overlap`](Self::overlap) and the two slab tests, sharing their transforms.
+    /// slab (`[normal, lo, hi]` of the first node in the first frame, then of the second in the
+    /// second): the distance between the box centres if they may, `None` if not. The same
+    /// tests as [`overlap`](Self::overlap) and the two slab tests, sharing their transforms.
     #[inline]
     pub(crate) fn overlap_with_slabs(
         &self,
         a: &BvhNode,
         b: &BvhNode,
-        slabs: impl FnOnce() -> ((Vec3, f32, f32), (Vec3, f32, f32)),
+        slab_a: (Vec3, f32, f32),
+        slab_b: (Vec3, f32, f32),
     ) -> Option<f32> {
-        let ca = (a.min + a.max) * 0.5;
-        let ea = (a.max - a.min) * 0.5;
-        let cb = (b.min + b.max) * 0.5;
-        let eb = (b.max - b.min) * 0.5;
-        // `b`'s centre in the first frame; `t` exactly as `setup` computes it.
-        let cb_in_a = self.rot * cb + self.translation;
-        let t = cb_in_a - ca;
-        if self.separated(t, ea, eb) {
+        self.overlap_prepared(
+            &self.prepare_first(a, slab_a),
+            &self.prepare_second(b, slab_b),
+        )
+    }
+
+    /// A node of the first tree with its slab (`[normal, lo, hi]`, first frame), prepared for
+    /// [`overlap_prepared`](Self::overlap_prepared) against several nodes of the second tree:
+    /// what depends on this node alone is computed once.
+    #[inline]
+    pub(crate) fn prepare_first(&self, a: &BvhNode, slab: (Vec3, f32, f32)) -> FirstBox {
+        let half = (a.max - a.min) * 0.5;
+        FirstBox {
+            center: (a.min + a.max) * 0.5,
+            half,
+            half_in_second: self.abs_rot_t * half,
+            normal: slab.0,
+            normal_in_second: (self.rot_t * slab.0).abs(),
+            slab: [slab.1, slab.2],
+        }
+    }
+
+    /// A node of the second tree with its slab (`[normal, lo, hi]`, second frame), prepared
+    /// for [`overlap_prepared`](Self::overlap_prepared) against several nodes of the first
+    /// tree.
+    #[inline]
+    pub(crate) fn prepare_second(&self, b: &BvhNode, slab: (Vec3, f32, f32)) -> SecondBox {
+        let half = (b.max - b.min) * 0.5;
+        let normal_in_first = self.rot * slab.0;
+        SecondBox {
+            // Its centre in the first frame, exactly as `setup` computes it.
+            center_in_first: self.rot * ((b.min + b.max) * 0.5) + self.translation,
+            half,
+            half_in_first: self.abs_rot * half,
+            normal_in_first,
+            normal_offset: normal_in_first.dot(self.translation),
+            slab: [slab.1, slab.2],
+        }
+    }
+
+    /// [`overlap_with_slabs`](Self::overlap_with_slabs) of two prepared nodes (the same
+    /// arithmetic, so the same answer and distance to the bit).
+    #[inline]
+    pub(crate) fn overlap_prepared(&self, a: &FirstBox, b: &SecondBox) -> Option<f32> {
+        let t = b.center_in_first - a.center;
+        if self.separated_prepared(t, a.half, b.half, b.half_in_first, a.half_in_second) {
             return None;
         }
-        let (slab_a, slab_b) = slabs();
         // The second box against the first node's slab `{p : lo ≤ n·p ≤ hi}` (first frame):
         // culled only when its whole interval along `n` lies outside, by more than the margin.
-        let (n, lo, hi) = slab_a;
-        let r = (self.rot_t * n).abs().dot(eb);
-        let d = n.dot(cb_in_a);
+        let [lo, hi] = a.slab;
+        let r = a.normal_in_second.dot(b.half);
+        let d = a.normal.dot(b.center_in_first);
         if d - r > hi + self.margin || d + r < lo - self.margin {
             return None;
         }
         // The first box against the second node's slab (second frame): `p_b = Rᵀ (p_a − t)`,
         // so `n·p_b = (R n)·p_a − (R n)·t`.
-        let (n, lo, hi) = slab_b;
-        let m = self.rot * n;
-        let r = m.abs().dot(ea);
-        let d = m.dot(ca) - m.dot(self.translation);
+        let [lo, hi] = b.slab;
+        let m = b.normal_in_first;
+        let r = m.abs().dot(a.half);
+        let d = m.dot(a.center) - b.normal_offset;
         if d - r > hi + self.margin || d + r < lo - self.margin {
             return None;
         }
@@ -112,15 +176,28 @@ impl RelativeFrame {
     /// near the limits of the `f32` range): then they cannot be culled.
     #[inline(always)]
     fn separated(&self, t: Vec3, ea: Vec3, eb: Vec3) -> bool {
+        self.separated_prepared(t, ea, eb, self.abs_rot * eb, self.abs_rot_t * ea)
+    }
+
+    /// [`separated`](Self::separated) with `|R| eb` and `|Rᵀ| ea` already computed.
+    #[inline(always)]
+    fn separated_prepared(
+        &self,
+        t: Vec3,
+        ea: Vec3,
+        eb: Vec3,
+        eb_in_a: Vec3,
+        ea_in_b: Vec3,
+    ) -> bool {
         if !t.is_finite() {
             return false;
         }
-        let ra = ea + self.abs_rot * eb + Vec3::splat(self.margin);
+        let ra = ea + eb_in_a + Vec3::splat(self.margin);
         if t.abs().cmpgt(ra).any() {
             return true;
         }
         let tb = self.rot_t * t;
-        let rb = eb + self.abs_rot_t * ea + Vec3::splat(self.margin);
+        let rb = eb + ea_in_b + Vec3::splat(self.margin);
         tb.abs().cmpgt(rb).any()
     }
 
@@ -185,7 +262,7 @@ mod tests {
             let frame = RelativeFrame::new(&p.pose, a.bvh(), b.bvh());
             for x in a.bvh().nodes().iter().take(40) {
                 for y in b.bvh().nodes().iter().take(40) {
-                    let both = frame.overlap_with_slabs(x, y, || (unbounded, unbounded));
+                    let both = frame.overlap_with_slabs(x, y, unbounded, unbounded);
                     assert_eq!(both.is_some(), frame.overlap(x, y));
                     let Some(d) = both else { continue };
                     overlapping += 1;
@@ -194,32 +271,20 @@ mod tests {
                     let n = Vec3::new(0.6, 0.0, 0.8);
                     let (lo, hi) = interval(y, |c| n.dot(frame.transform_point(c)));
                     let holding = (n, lo, hi);
-                    assert!(
-                        frame
-                            .overlap_with_slabs(x, y, || (holding, unbounded))
-                            .is_some()
-                    );
+                    assert!(frame.overlap_with_slabs(x, y, holding, unbounded).is_some());
                     let width = hi - lo + 1.0;
                     let beside = (n, lo - 2.0 * width, lo - width);
-                    assert!(
-                        frame
-                            .overlap_with_slabs(x, y, || (beside, unbounded))
-                            .is_none()
-                    );
+                    assert!(frame.overlap_with_slabs(x, y, beside, unbounded).is_none());
                     // The same for `x`'s box against a slab of the second frame.
                     let (lo, hi) = interval(x, |c| n.dot(frame.rot_t * (c - frame.translation)));
                     assert!(
                         frame
-                            .overlap_with_slabs(x, y, || (unbounded, (n, lo, hi)))
+                            .overlap_with_slabs(x, y, unbounded, (n, lo, hi))
                             .is_some()
                     );
                     let width = hi - lo + 1.0;
                     let beside = (n, hi + width, hi + 2.0 * width);
-                    assert!(
-                        frame
-                            .overlap_with_slabs(x, y, || (unbounded, beside))
-                            .is_none()
-                    );
+                    assert!(frame.overlap_with_slabs(x, y, unbounded, beside).is_none());
                     culled += 1;
                 }
             }
