@@ -202,14 +202,19 @@ fn configs() -> Vec<Config> {
         family: "estimator",
         query: variant(Decision::Confidence, false),
     });
-    out.push(Config {
-        label: "calibrated p0.99 k10 best-first".into(),
-        family: "estimator",
-        query: AdbQuery {
-            order: Order::BestFirst,
-            ..tuned(0.99, 10, 0.0, Budget::Unlimited)
-        },
-    });
+    for (label, order) in [
+        ("calibrated p0.99 k10 evidence-first", Order::EvidenceFirst),
+        ("calibrated p0.99 k10 best-first", Order::BestFirst),
+    ] {
+        out.push(Config {
+            label: label.into(),
+            family: "estimator",
+            query: AdbQuery {
+                order,
+                ..tuned(0.99, 10, 0.0, Budget::Unlimited)
+            },
+        });
+    }
     out.push(Config {
         label: "calibrated p0.99 k10 evidence".into(),
         family: "estimator",

@@ -16,14 +16,15 @@
 //!   mesh as colliding.
 //! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--budget-us T |
 //!   --budget-nodes N] [--leaves exact|estimated] [--decision evidence|confidence]
-//!   [--order evidence-first|best-first] [--estimator calibrated|paper|planarity]
+//!   [--order depth-first|evidence-first|best-first] [--estimator calibrated|paper|planarity]
 //!   [--resolution 4]`; `probability` is the ADB confidence, `nodes_visited` the node pairs
 //!   visited. `--leaves estimated` never tests a triangle (default: leaf pairs are tested
 //!   exactly); `--decision evidence` stops as soon as the evidence found reaches `p_min`
 //!   (`Decision::Evidence`; default `confidence`: waits for `k_min` pieces of evidence);
 //!   `--order best-first` expands the most probable pair of the whole queue next (the papers'
-//!   order; default `evidence-first`: the pairs that count as evidence best first, then the
-//!   others depth first, `Order::EvidenceFirst`).
+//!   order), `evidence-first` the pairs that count as evidence best first, then the others depth
+//!   first (`Order::EvidenceFirst`); default `depth-first`: the most promising child of the pair
+//!   just expanded next (`Order::DepthFirst`).
 //!   `--estimator paper` is the papers' method as published: their decision rule (so no
 //!   `--decision`), best-first order and estimated leaves unless `--order` or `--leaves` say
 //!   otherwise.
@@ -53,7 +54,7 @@ use cli::{DECISIONS, ORDERS, parse_choice};
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
 [--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
-[--decision evidence|confidence] [--order evidence-first|best-first] \
+[--decision evidence|confidence] [--order depth-first|evidence-first|best-first] \
 [--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
 
 /// The query modes; each parses its own flags.

@@ -259,6 +259,7 @@ fn adb_mode_answers_with_confidences_and_node_budgets_are_repeatable() {
         &["--estimator", "paper", "--leaves", "exact", "--p-min", "1"],
         &["--leaves", "exact", "--estimator", "paper", "--p-min", "1"],
         &["--order", "best-first", "--p-min", "1"],
+        &["--order", "evidence-first", "--p-min", "1"],
         &[
             "--estimator",
             "paper",

@@ -5,8 +5,8 @@ use std::collections::BinaryHeap;
 
 use super::traverse::Order;
 
-/// The pairs waiting to be expanded, in the query's [`Order`]: a max-heap, and for
-/// [`Order::EvidenceFirst`] a stack of the pairs below the evidence bar.
+/// The pairs waiting to be expanded, in the query's [`Order`]: a max-heap, and a stack (for
+/// [`Order::EvidenceFirst`] the pairs below the evidence bar, for [`Order::DepthFirst`] all).
 #[derive(Debug, Default)]
 pub(super) struct Queue {
     heap: BinaryHeap<Entry>,
@@ -28,6 +28,7 @@ impl Queue {
         match self.order {
             Order::BestFirst => self.heap.pop(),
             Order::EvidenceFirst => self.heap.pop().or_else(|| self.stack.pop()),
+            Order::DepthFirst => self.stack.pop(),
         }
     }
 
@@ -36,14 +37,15 @@ impl Queue {
     pub(super) fn push(&mut self, e: Entry) {
         match self.order {
             Order::EvidenceFirst if e.p < self.evidence_bar => self.stack.push(e),
+            Order::DepthFirst => self.stack.push(e),
             _ => self.heap.push(e),
         }
     }
 
     /// Queues the children of one expanded pair (at most four).
     pub(super) fn push_children(&mut self, children: &mut [Entry]) {
-        if self.order == Order::EvidenceFirst {
-            // Least probable first, so that the most probable is popped next.
+        if self.order != Order::BestFirst {
+            // Least promising first, so that the most promising is popped next.
             children.sort_unstable();
         }
         for &c in children.iter() {
@@ -56,11 +58,14 @@ impl Queue {
     }
 }
 
-/// A queued node pair, ordered by probability, ties broken by node indices (deterministic).
+/// A queued node pair, ordered by its rank, ties broken by node indices (deterministic).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Entry {
     /// The pair's probability.
     pub(super) p: f64,
+    /// Its rank in the queue: the probability, or for [`Order::DepthFirst`] the probability
+    /// weighted by how squarely the boxes straddle each other's surface.
+    pub(super) rank: f64,
     /// Node of the first tree.
     pub(super) a: u32,
     /// Node of the second tree.
@@ -80,8 +85,8 @@ impl PartialOrd for Entry {
 }
 impl Ord for Entry {
     fn cmp(&self, o: &Self) -> Ordering {
-        self.p
-            .total_cmp(&o.p)
+        self.rank
+            .total_cmp(&o.rank)
             .then_with(|| o.a.cmp(&self.a))
             .then_with(|| o.b.cmp(&self.b))
     }

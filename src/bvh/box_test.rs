@@ -20,6 +20,33 @@ pub(crate) struct RelativeFrame {
     margin: f32,
 }
 
+/// What [`RelativeFrame::overlap_prepared`] knows of two boxes that may overlap.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct BoxOverlap {
+    /// Distance between the box centres.
+    pub(crate) center_distance: f32,
+    /// How squarely each box straddles the middle plane of the other node's slab (the plane
+    /// its surface lies near), multiplied over both: in `[0, 1]`, 1 when each box is centred
+    /// on the other's plane, 0 when either lies on one side of it. Surfaces cross only where
+    /// each reaches both sides of the other, so pairs that straddle are the likelier to hold
+    /// intersecting triangles. ½ per side whose slab is unbounded (no plane to straddle).
+    pub(crate) straddle: f32,
+}
+
+/// How squarely the interval `[d − r, d + r]` straddles the middle of `[lo, hi]`: the shorter
+/// of its two parts on either side of the middle, over `r`, clamped to `[0, 1]` (0 for NaN);
+/// ½ for an unbounded slab or an empty interval.
+#[inline]
+fn straddle(d: f32, r: f32, lo: f32, hi: f32) -> f32 {
+    let middle = 0.5 * (lo + hi);
+    if !(r > 0.0 && middle.is_finite()) {
+        return 0.5;
+    }
+    let share = (middle - (d - r)).min((d + r) - middle) / r;
+    // NaN (a NaN centre) counts as no straddle.
+    if share > 0.0 { share.min(1.0) } else { 0.0 }
+}
+
 /// A node of the first tree prepared for box tests ([`RelativeFrame::prepare_first`]).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct FirstBox {
@@ -90,6 +117,7 @@ impl RelativeFrame {
             &self.prepare_first(a, slab_a),
             &self.prepare_second(b, slab_b),
         )
+        .map(|o| o.center_distance)
     }
 
     /// A node of the first tree with its slab (`[normal, lo, hi]`, first frame), prepared for
@@ -127,9 +155,10 @@ impl RelativeFrame {
     }
 
     /// [`overlap_with_slabs`](Self::overlap_with_slabs) of two prepared nodes (the same
-    /// arithmetic, so the same answer and distance to the bit).
+    /// arithmetic, so the same answer and distance to the bit), and how squarely each box
+    /// straddles the other node's slab.
     #[inline]
-    pub(crate) fn overlap_prepared(&self, a: &FirstBox, b: &SecondBox) -> Option<f32> {
+    pub(crate) fn overlap_prepared(&self, a: &FirstBox, b: &SecondBox) -> Option<BoxOverlap> {
         let t = b.center_in_first - a.center;
         if self.separated_prepared(t, a.half, b.half, b.half_in_first, a.half_in_second) {
             return None;
@@ -142,6 +171,7 @@ impl RelativeFrame {
         if d - r > hi + self.margin || d + r < lo - self.margin {
             return None;
         }
+        let straddle_a = straddle(d, r, lo, hi);
         // The first box against the second node's slab (second frame): `p_b = Rᵀ (p_a − t)`,
         // so `n·p_b = (R n)·p_a − (R n)·t`.
         let [lo, hi] = b.slab;
@@ -151,7 +181,10 @@ impl RelativeFrame {
         if d - r > hi + self.margin || d + r < lo - self.margin {
             return None;
         }
-        Some(t.length())
+        Some(BoxOverlap {
+            center_distance: t.length(),
+            straddle: straddle_a * straddle(d, r, lo, hi),
+        })
     }
 
     /// Centre offset in the first frame, then each box's half extents.
@@ -247,6 +280,22 @@ mod tests {
             .fold((f32::INFINITY, f32::NEG_INFINITY), |(l, h), v| {
                 (l.min(v), h.max(v))
             })
+    }
+
+    /// The straddle is 1 for an interval centred on the slab's middle, falls off linearly as
+    /// the middle moves toward either end of it, is 0 once the middle is outside, and ½ when
+    /// there is no plane (an unbounded slab) or no extent.
+    #[test]
+    fn straddle_measures_how_squarely_an_interval_crosses_the_middle_plane() {
+        // Slab [0, 2], middle 1; intervals of half width 1 at centres d.
+        assert_eq!(straddle(1.0, 1.0, 0.0, 2.0), 1.0);
+        assert_eq!(straddle(1.5, 1.0, 0.0, 2.0), 0.5);
+        assert_eq!(straddle(0.5, 1.0, 0.0, 2.0), 0.5);
+        assert_eq!(straddle(2.0, 1.0, 0.0, 2.0), 0.0);
+        assert_eq!(straddle(-3.0, 1.0, 0.0, 2.0), 0.0);
+        assert_eq!(straddle(1.0, 1.0, f32::NEG_INFINITY, f32::INFINITY), 0.5);
+        assert_eq!(straddle(1.0, 0.0, 0.0, 2.0), 0.5);
+        assert_eq!(straddle(f32::NAN, 1.0, 0.0, 2.0), 0.0);
     }
 
     /// The combined test answers as the box test alone when the slabs are unbounded, with the
