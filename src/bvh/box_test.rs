@@ -24,7 +24,8 @@ pub(crate) struct RelativeFrame {
 
 /// [`RelativeFrame`]'s transforms as 16-byte SIMD vectors: lane by lane the same IEEE
 /// operations in the same order as the scalar `Vec3` code, so the same results to the bit, in
-/// a third of the instructions.
+/// fewer instructions (11 % fewer per ADB query on dragon_50k than the scalar form,
+/// callgrind).
 #[derive(Debug, Clone, Copy)]
 struct SimdFrame {
     rot: Mat3A,
