@@ -74,6 +74,14 @@ pub struct AdbNode {
     pub slab: [f32; 2],
 }
 
+impl AdbNode {
+    /// The slab as `(normal, lo, hi)`, the form the box tests take.
+    #[inline]
+    fn slab_plane(&self) -> (Vec3, f32, f32) {
+        (self.normal, self.slab[0], self.slab[1])
+    }
+}
+
 /// An ADB-tree (Klein & Zachmann 2003): a [`CollisionMesh`] whose BVH nodes also carry a tiny
 /// description of the triangle distribution inside them ([`AdbNode`]), so that the
 /// probability that two nodes contain intersecting triangles can be estimated without
@@ -306,39 +314,26 @@ pub(crate) fn overlap_distance(
     ia: u32,
     ib: u32,
 ) -> Option<f32> {
-    let (x, y) = (
-        &a.collision_mesh().bvh().nodes()[ia as usize],
-        &b.collision_mesh().bvh().nodes()[ib as usize],
-    );
-    let (na, nb) = (&a.nodes()[ia as usize], &b.nodes()[ib as usize]);
-    frame.overlap_with_slabs(
-        x,
-        y,
-        (na.normal, na.slab[0], na.slab[1]),
-        (nb.normal, nb.slab[0], nb.slab[1]),
-    )
+    let (first, second) = (prepare_first(a, frame, ia), prepare_second(b, frame, ib));
+    frame
+        .overlap_prepared(&first, &second)
+        .map(|o| o.center_distance)
 }
 
 /// Node `ia` of the first tree with its slab, prepared for box and slab tests
 /// against several nodes of the second (`RelativeFrame::overlap_prepared`).
 #[inline]
 pub(crate) fn prepare_first(a: &AdbTree, frame: &RelativeFrame, ia: u32) -> FirstBox {
-    let n = &a.nodes()[ia as usize];
-    frame.prepare_first(
-        &a.collision_mesh().bvh().nodes()[ia as usize],
-        (n.normal, n.slab[0], n.slab[1]),
-    )
+    let box_ = &a.collision_mesh().bvh().nodes()[ia as usize];
+    frame.prepare_first(box_, a.nodes()[ia as usize].slab_plane())
 }
 
 /// Node `ib` of the second tree with its slab, prepared for box and slab tests
 /// against several nodes of the first (`RelativeFrame::overlap_prepared`).
 #[inline]
 pub(crate) fn prepare_second(b: &AdbTree, frame: &RelativeFrame, ib: u32) -> SecondBox {
-    let n = &b.nodes()[ib as usize];
-    frame.prepare_second(
-        &b.collision_mesh().bvh().nodes()[ib as usize],
-        (n.normal, n.slab[0], n.slab[1]),
-    )
+    let box_ = &b.collision_mesh().bvh().nodes()[ib as usize];
+    frame.prepare_second(box_, b.nodes()[ib as usize].slab_plane())
 }
 
 /// Well-filled cell count of every node, over all triangles in or crossing its box.
