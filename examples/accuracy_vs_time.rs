@@ -19,8 +19,10 @@
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh, 600 poses each (the README's figures: `--full --poses 300`). Writes
 //! `results.csv`, `summary.csv`, `outcomes.csv`, `error_vs_time.svg`, `error_vs_distance.svg` and
-//! `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table, the
-//! reliability of the reported probabilities, the ADB targets per mesh (met or not), where the time
+//! `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table of the
+//! headline configurations, a table of the variants (orders, decisions, the raw estimate without
+//! its fitted calibration) against the default, the reliability of the reported probabilities,
+//! the ADB targets per mesh (met or not), where the time
 //! of the exact and the default queries goes on colliding and non-colliding poses (median time,
 //! node pairs, time per node pair: `outcomes.csv`), and the oracle bound: what a traversal that
 //! went straight down to the nearest intersecting triangle pair would take
@@ -225,14 +227,25 @@ fn configs() -> Vec<Config> {
         family: "estimator",
         query: variant(Decision::Evidence, false),
     });
-    out.push(Config {
-        label: "planarity p0.99 k10".into(),
-        family: "estimator",
-        query: AdbQuery {
-            estimator: Arc::new(PlanarityEstimator::default()),
-            ..AdbQuery::default()
-        },
-    });
+    // The fitted calibration undone: the raw estimate, with exact leaves (the default's
+    // setting), under budgets and with estimated leaves (where the estimate decides).
+    for (suffix, budget, exact_leaves) in [
+        ("", Budget::Unlimited, true),
+        (" 20us", Budget::Time(Duration::from_micros(20)), true),
+        (" 100nodes", Budget::NodePairs(100), true),
+        (" estimated-leaves", Budget::Unlimited, false),
+    ] {
+        out.push(Config {
+            label: format!("planarity p0.99 k10{suffix}"),
+            family: "estimator",
+            query: AdbQuery {
+                estimator: Arc::new(PlanarityEstimator::default()),
+                budget,
+                exact_leaves,
+                ..AdbQuery::default()
+            },
+        });
+    }
     out
 }
 
@@ -240,6 +253,17 @@ fn configs() -> Vec<Config> {
 const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
 const PAPER_LABEL: &str = "paper p0.99 k10";
 const BUDGET_20_LABEL: &str = "calibrated p0.99 k10 20us";
+const BUDGET_5_LABEL: &str = "calibrated p0.99 k10 5us";
+const NODE_BUDGET_100_LABEL: &str = "calibrated p0.99 k10 100nodes";
+const ESTIMATED_LEAVES_LABEL: &str = "calibrated p0.99 k10 estimated-leaves";
+/// The configurations of the printed table (the exact query besides); the variants table and
+/// summary.csv have the others.
+const HEADLINE_LABELS: [&str; 4] = [
+    PAPER_LABEL,
+    DEFAULT_LABEL,
+    BUDGET_20_LABEL,
+    ESTIMATED_LEAVES_LABEL,
+];
 /// The ADB targets (README, "ADB-trees: what accuracy costs in time"): mean error and error
 /// near contact (%), the default's median against the exact query's on meshes of at least
 /// `TARGET_RATIO_TRIANGLES` triangles, and the error with a 20 µs budget (%).
@@ -616,12 +640,9 @@ fn write_outputs(
                 s.brier,
                 s.budget_kept
             )?;
-            // The table shows the headline configurations; summary.csv has them all.
-            if c.label == DEFAULT_LABEL
-                || c.label == PAPER_LABEL
-                || c.label == BUDGET_20_LABEL
-                || c.family == "estimator"
-            {
+            // The table shows the headline configurations, the variants table the others
+            // worth comparing; summary.csv has them all.
+            if HEADLINE_LABELS.contains(&c.label.as_str()) {
                 writeln!(
                     table,
                     "| {tris_note} | {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} |",
@@ -640,11 +661,50 @@ fn write_outputs(
     }
     summary.flush()?;
     println!("\n{table}");
+    println!("{}", variants_table(configs, order, all)?);
 
     plot_error_vs_time(settings, configs, order, all)?;
     plot_error_vs_distance(settings, configs, order, all)?;
     plot_reliability(settings, configs, order, all)?;
     Ok(())
+}
+
+/// The variants against the default, compactly: one row per variant, one column per mesh,
+/// each cell the error (%), the Brier score and the median against the exact query's.
+fn variants_table(
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<String, std::fmt::Error> {
+    let mut table = String::new();
+    writeln!(
+        table,
+        "variants (each cell: error % · Brier · median × exact):\n\n| config | {} |",
+        order.join(" | ")
+    )?;
+    writeln!(table, "|---|{}", "---:|".repeat(order.len()))?;
+    let rows = configs.iter().enumerate().filter(|(_, c)| {
+        c.label == DEFAULT_LABEL
+            || (c.family == "estimator" && !HEADLINE_LABELS.contains(&c.label.as_str()))
+            || c.label == NODE_BUDGET_100_LABEL
+    });
+    for (k, c) in rows {
+        write!(table, "| {} |", c.label)?;
+        for name in order {
+            let records = &all[name];
+            let exact = stats(records, |r| r.exact);
+            let s = stats(records, |r| r.adb[k]);
+            write!(
+                table,
+                " {:.1} · {:.3} · {:.2}× |",
+                s.error,
+                s.brier,
+                s.median_us / exact.median_us
+            )?;
+        }
+        writeln!(table)?;
+    }
+    Ok(table)
 }
 
 /// The best median a traversal that answers "collision" from a triangle test could reach by its
@@ -866,7 +926,7 @@ fn plot_error_vs_time(
     let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
     root.fill(&WHITE)?;
     let mut curves = Vec::new();
-    let (mut tmax, mut emax) = (1.0f64, 5.0f64);
+    let (mut tmin, mut tmax, mut emax) = (f64::INFINITY, 1.0f64, 5.0f64);
     for name in order {
         let records = &all[name];
         let exact = stats(records, |r| r.exact);
@@ -883,28 +943,32 @@ fn plot_error_vs_time(
             .chain(unbudgeted)
             .map(|(k, _)| {
                 let s = stats(records, |r| r.adb[k]);
-                (s.median_us, s.error)
+                (s.p99_us, s.error)
             })
             .collect();
-        tmax = tmax
-            .max(exact.median_us)
-            .max(pts.iter().map(|p| p.0).fold(0.0, f64::max));
-        emax = emax.max(pts.iter().map(|p| p.1).fold(0.0, f64::max));
-        curves.push((name.clone(), pts, exact.median_us));
+        for &(t, e) in pts.iter().chain([(exact.p99_us, 0.0)].iter()) {
+            tmin = tmin.min(t);
+            tmax = tmax.max(t);
+            emax = emax.max(e);
+        }
+        curves.push((name.clone(), pts, exact.p99_us));
     }
+    let tmin = if tmin.is_finite() { tmin * 0.8 } else { 0.5 };
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            "Calibrated ADB: error vs median time, budgets 5-100 µs then none (▲ exact)",
+            "Calibrated ADB: error vs p99 time, time budgets 5-100 µs then none (▲ exact)",
             ("sans-serif", 20),
         )
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(50)
-        .build_cartesian_2d((0.5f64..tmax * 1.3).log_scale(), 0.0f64..emax * 1.1)?;
+        .build_cartesian_2d((tmin..tmax * 1.3).log_scale(), 0.0f64..emax * 1.1)?;
     chart
         .configure_mesh()
-        .x_desc("median query time (µs, log)")
+        .x_desc("p99 query time (µs, log): what a frame must reserve per query")
         .y_desc("error (%)")
+        .x_label_formatter(&|v| tick_label(*v))
+        .light_line_style(TRANSPARENT)
         .draw()?;
     for (i, (name, pts, exact_us)) in curves.into_iter().enumerate() {
         let color = palette(i);
@@ -915,69 +979,96 @@ fn plot_error_vs_time(
             color.filled(),
         )))?;
     }
-    finish(&mut chart, &root)
+    finish(&mut chart, &root, SeriesLabelPosition::UpperRight)
 }
 
-/// Error % of the default configuration against the offset from first contact.
+/// A log axis's tick: whole numbers from 10 up, one decimal below (so no two ticks read alike).
+fn tick_label(v: f64) -> String {
+    if v >= 10.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.1}")
+    }
+}
+
+/// Error % against the offset from first contact: the default configuration (left) and the
+/// 20 µs budget (right), one curve per mesh.
 fn plot_error_vs_distance(
     settings: &Settings,
     configs: &[Config],
     order: &[String],
     all: &BTreeMap<String, Vec<PoseRecord>>,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let k = configs
-        .iter()
-        .position(|c| c.label == DEFAULT_LABEL)
-        .expect("default config");
     let path = settings.out.join("error_vs_distance.svg");
-    let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
+    let root = SVGBackend::new(&path, (1200, 560)).into_drawing_area();
     root.fill(&WHITE)?;
+    let root = root.titled(
+        "ADB error vs distance from first contact",
+        ("sans-serif", 20),
+    )?;
+    let panels = root.split_evenly((1, 2));
     let width = 2.0 * SPREAD / DISTANCE_BINS as f32;
-    let mut curves = Vec::new();
+    // Both panels share the error axis, so the two configurations compare at a glance.
+    let mut panel_curves = Vec::new();
     let mut emax = 5.0f64;
-    for name in order {
-        let mut bins = [(0usize, 0usize); DISTANCE_BINS];
-        for r in &all[name] {
-            let b = (((r.offset + SPREAD) / width) as usize).min(DISTANCE_BINS - 1);
-            bins[b].0 += 1;
-            bins[b].1 += usize::from(r.adb[k].collides != r.exact.collides);
-        }
-        let pts: Vec<(f64, f64)> = bins
+    for label in [DEFAULT_LABEL, BUDGET_20_LABEL] {
+        let k = configs
             .iter()
-            .enumerate()
-            .filter(|(_, b)| b.0 > 0)
-            .map(|(i, b)| {
-                (
-                    f64::from(-SPREAD + width * (i as f32 + 0.5)),
-                    100.0 * b.1 as f64 / b.0 as f64,
-                )
-            })
-            .collect();
-        emax = emax.max(pts.iter().map(|p| p.1).fold(0.0, f64::max));
-        curves.push((name.clone(), pts));
+            .position(|c| c.label == label)
+            .expect("config");
+        let mut curves = Vec::new();
+        for name in order {
+            let mut bins = [(0usize, 0usize); DISTANCE_BINS];
+            for r in &all[name] {
+                let b = (((r.offset + SPREAD) / width) as usize).min(DISTANCE_BINS - 1);
+                bins[b].0 += 1;
+                bins[b].1 += usize::from(r.adb[k].collides != r.exact.collides);
+            }
+            let pts: Vec<(f64, f64)> = bins
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| b.0 > 0)
+                .map(|(i, b)| {
+                    (
+                        f64::from(-SPREAD + width * (i as f32 + 0.5)),
+                        100.0 * b.1 as f64 / b.0 as f64,
+                    )
+                })
+                .collect();
+            emax = emax.max(pts.iter().map(|p| p.1).fold(0.0, f64::max));
+            curves.push((name.clone(), pts));
+        }
+        panel_curves.push((label, curves));
     }
-    let mut chart = ChartBuilder::on(&root)
-        .caption(
-            format!("ADB error vs distance from first contact ({DEFAULT_LABEL})"),
-            ("sans-serif", 20),
-        )
-        .margin(12)
-        .x_label_area_size(40)
-        .y_label_area_size(50)
-        .build_cartesian_2d(f64::from(-SPREAD)..f64::from(SPREAD), 0.0f64..emax * 1.1)?;
-    chart
-        .configure_mesh()
-        .x_desc("offset from first contact (fraction of size; < 0 overlapping)")
-        .y_desc("error (%)")
-        .draw()?;
-    for (i, (name, pts)) in curves.into_iter().enumerate() {
-        draw_curve(&mut chart, &pts, name, palette(i), 3)?;
+    for (area, (label, curves)) in panels.iter().zip(panel_curves) {
+        let mut chart = ChartBuilder::on(area)
+            .caption(label, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(f64::from(-SPREAD)..f64::from(SPREAD), 0.0f64..emax * 1.1)?;
+        chart
+            .configure_mesh()
+            .x_desc("offset from first contact (fraction of size; < 0 overlapping)")
+            .y_desc("error (%)")
+            .draw()?;
+        for (i, (name, pts)) in curves.into_iter().enumerate() {
+            draw_curve(&mut chart, &pts, name, palette(i), 3)?;
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()?;
     }
-    finish(&mut chart, &root)
+    root.present()?;
+    Ok(())
 }
 
-/// Reliability curve: observed collision frequency against reported probability (10 bins),
-/// over all meshes, for the default and the 20 µs configurations.
+/// Reliability curve: observed collision frequency against reported probability (10 bins,
+/// each point at its mean reported probability, with its number of answers), over all meshes,
+/// for the default and the 5 µs and 20 µs budgets.
 fn plot_reliability(
     settings: &Settings,
     configs: &[Config],
@@ -1000,13 +1091,21 @@ fn plot_reliability(
         .configure_mesh()
         .x_desc("reported probability")
         .y_desc("observed collision frequency")
+        .light_line_style(TRANSPARENT)
         .draw()?;
-    chart.draw_series(LineSeries::new(
-        vec![(0.0, 0.0), (1.0, 1.0)],
-        BLACK.mix(0.4),
-    ))?;
+    chart
+        .draw_series(DashedLineSeries::new(
+            vec![(0.0, 0.0), (1.0, 1.0)],
+            6,
+            4,
+            BLACK.mix(0.5).stroke_width(1),
+        ))?
+        .label("perfectly calibrated")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], BLACK.mix(0.5)));
     println!("reliability (all meshes): reported probability bin -> observed frequency (queries)");
-    for (i, label) in [DEFAULT_LABEL, BUDGET_20_LABEL, PAPER_LABEL]
+    // Plotted: the configurations whose probability decides (the papers' rule ignores it, so
+    // its line is printed only).
+    for (i, label) in [DEFAULT_LABEL, BUDGET_5_LABEL, BUDGET_20_LABEL, PAPER_LABEL]
         .into_iter()
         .enumerate()
     {
@@ -1051,10 +1150,24 @@ fn plot_reliability(
             brier.0 / brier.1.max(1) as f64,
             line.join(", ")
         );
+        if label == PAPER_LABEL {
+            continue;
+        }
         let name = format!("{label} (Brier {:.3})", brier.0 / brier.1.max(1) as f64);
         draw_curve(&mut chart, &pts, name, palette(i), 4)?;
+        // How many answers each point stands for, beside it (inside the frame).
+        let counts = bins.iter().filter(|b| b.0 > 0).zip(&pts);
+        chart.draw_series(counts.map(|(b, &(x, y))| {
+            let x = if x > 0.9 { x - 0.09 } else { x + 0.015 };
+            let y = (y + 0.01 - 0.045 * i as f64).clamp(0.02, 0.97);
+            Text::new(
+                format!("{}", b.0),
+                (x, y),
+                ("sans-serif", 11).into_font().color(&palette(i)),
+            )
+        }))?;
     }
-    finish(&mut chart, &root)
+    finish(&mut chart, &root, SeriesLabelPosition::UpperLeft)
 }
 
 /// One labelled curve with its points marked.
@@ -1076,16 +1189,18 @@ where
     Ok(())
 }
 
-/// The legend box, then the file.
+/// The legend box (where the curves leave room), then the file.
 fn finish<'a, X>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
     root: &DrawingArea<SVGBackend<'a>, Shift>,
+    legend: SeriesLabelPosition,
 ) -> Result<(), Box<dyn std::error::Error>>
 where
     X: Ranged<ValueType = f64>,
 {
     chart
         .configure_series_labels()
+        .position(legend)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()?;

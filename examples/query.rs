@@ -29,16 +29,19 @@
 //!   `--decision`), best-first order and estimated leaves unless `--order` or `--leaves` say
 //!   otherwise.
 //!
-//! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value)
-//! exits with code 2 and one line on stderr naming the file and line.
+//! Bad input (missing or malformed file, NaN, short rows, unknown mode or flag, bad flag value,
+//! a flag given twice) exits with code 2 and one line on stderr naming the file and line.
+//! `--help` prints the usage to stdout. Building the trees of a large mesh (from 20 000
+//! triangles) shows its progress on stderr; when `--a` and `--b` are the same file, it is
+//! loaded and built once.
 #[path = "support/cli.rs"]
 mod cli;
 
 use std::ffi::OsString;
-use std::io::Write;
-use std::path::PathBuf;
+use std::io::{IsTerminal, Write};
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 use stochastic_collision::adb::{
@@ -57,10 +60,32 @@ const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode e
 [--decision evidence|confidence] [--order depth-first|evidence-first|best-first] \
 [--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
 
+/// What `--help` prints after the usage.
+const HELP: &str = "\
+Collides mesh B, at each pose of poses.csv (header tx,ty,tz,qx,qy,qz,qw: B in A's frame), with
+mesh A (at identity) and writes the CSV index,collides,probability,time_ns,nodes_visited to
+--out, else to stdout.
+  --mode exact      BVH and exact triangle tests (--solid: a mesh inside a closed other one
+                    collides too)
+  --mode adb        ADB-tree: --p-min (0.99) and --k-min (10) set the decision, --budget-us or
+                    --budget-nodes a budget per query, --leaves, --decision, --order and
+                    --estimator the traversal, --resolution (4) the cells per axis
+Bad input exits with code 2 and one line on stderr.";
+
+/// Meshes from this many triangles show the progress of their build on stderr (smaller ones
+/// build in well under a second).
+const PROGRESS_MIN_TRIANGLES: usize = 20_000;
+
 /// The query modes; each parses its own flags.
 enum Mode {
     Exact(ExactOptions),
     Adb { query: AdbQuery, resolution: u32 },
+}
+
+/// What the command line asks for.
+enum Command {
+    Run(Args),
+    Help,
 }
 
 struct Args {
@@ -79,7 +104,7 @@ struct Row {
     nodes_visited: u64,
 }
 
-fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
+fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Command, String> {
     let (mut a, mut b, mut poses, mut out, mut mode) = (None, None, None, None, None);
     let mut solid = false;
     let mut adb = AdbQuery::default();
@@ -90,10 +115,16 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
     let mut leaves: Option<bool> = None;
     let mut decision: Option<Decision> = None;
     let mut order: Option<Order> = None;
+    // Every flag at most once (an unknown flag is refused the first time).
+    let mut seen: Vec<String> = Vec::new();
     while let Some(flag) = it.next() {
         let flag = flag
             .into_string()
             .map_err(|f| format!("unknown argument `{}`; {USAGE}", f.to_string_lossy()))?;
+        if seen.contains(&flag) {
+            return Err(format!("{flag} given twice; give each flag at most once"));
+        }
+        seen.push(flag.clone());
         // Paths may be any OS string; other values must be text.
         let mut next = |name: &str| {
             it.next()
@@ -119,11 +150,7 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
             }
             "--budget-us" => {
                 let text = value("--budget-us")?;
-                let us: f64 =
-                    parse_number(&text, "--budget-us", |t: f64| t > 0.0 && t.is_finite())?;
-                let budget = Duration::try_from_secs_f64(us * 1e-6)
-                    .map_err(|_| format!("--budget-us: invalid value `{text}` (too large)"))?;
-                adb.budget = Budget::Time(budget);
+                adb.budget = Budget::Time(parse_budget_us(&text)?);
                 budget_flags += 1;
                 adb_flags.push("--budget-us");
             }
@@ -182,7 +209,7 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
                 })?;
                 adb_flags.push("--resolution");
             }
-            "-h" | "--help" => return Err(USAGE.to_string()),
+            "-h" | "--help" => return Ok(Command::Help),
             other => return Err(format!("unknown argument `{other}`; {USAGE}")),
         }
     }
@@ -223,13 +250,30 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Args, String> {
         Some(other) => return Err(format!("unknown mode `{other}` (known: exact, adb)")),
         None => return Err(missing("--mode")),
     };
-    Ok(Args {
+    Ok(Command::Run(Args {
         a: a.ok_or_else(|| missing("--a"))?,
         b: b.ok_or_else(|| missing("--b"))?,
         poses: poses.ok_or_else(|| missing("--poses"))?,
         out,
         mode,
-    })
+    }))
+}
+
+/// The time budget of `--budget-us`: finite, at least 1 ns (a value that would round to no
+/// time at all is refused like 0) and within what a `Duration` holds.
+fn parse_budget_us(text: &str) -> Result<Duration, String> {
+    let invalid = || {
+        format!("--budget-us: invalid value `{text}` (a number of microseconds, at least 0.001)")
+    };
+    let us: f64 = parse_number(text, "--budget-us", |t: f64| t >= 0.001 && t.is_finite())
+        .map_err(|_| invalid())?;
+    match Duration::try_from_secs_f64(us * 1e-6) {
+        Ok(budget) if budget.is_zero() => Err(invalid()),
+        Ok(budget) => Ok(budget),
+        Err(_) => Err(format!(
+            "--budget-us: invalid value `{text}` (too large for a duration)"
+        )),
+    }
 }
 
 /// A flag's value as text.
@@ -251,21 +295,150 @@ fn parse_number<T: std::str::FromStr + Copy>(
     }
 }
 
+/// Whether `a` and `b` name the same file (the same path, or the same file once resolved).
+fn same_file(a: &Path, b: &Path) -> bool {
+    a == b
+        || matches!(
+            (std::fs::canonicalize(a), std::fs::canonicalize(b)),
+            (Ok(x), Ok(y)) if x == y
+        )
+}
+
+/// How a path is named in progress lines: its file name.
+fn display_name(path: &Path) -> String {
+    path.file_name().map_or_else(
+        || path.display().to_string(),
+        |n| n.to_string_lossy().into_owned(),
+    )
+}
+
+/// One build step of a large mesh shown on stderr (never stdout: the CSV may go there): a bar
+/// redrawn in place when stderr is a terminal and the step reports progress, else the label
+/// and then the time taken. [`Progress::finish`] always ends the line.
+struct Progress {
+    label: String,
+    start: Instant,
+    bar: bool,
+    /// The largest count drawn so far (updates come from several build threads).
+    shown: Mutex<usize>,
+}
+
+impl Progress {
+    const WIDTH: usize = 30;
+
+    fn start(label: String, with_bar: bool) -> Self {
+        let bar = with_bar && std::io::stderr().is_terminal();
+        if bar {
+            eprint!("\r  {label} [{}]   0%", " ".repeat(Self::WIDTH));
+        } else {
+            eprint!("  {label} ...");
+        }
+        Self {
+            label,
+            start: Instant::now(),
+            bar,
+            shown: Mutex::new(0),
+        }
+    }
+
+    /// Redraws the bar about every 2 %; the last state is drawn by [`Progress::finish`].
+    fn update(&self, done: usize, total: usize) {
+        if !self.bar || done >= total {
+            return;
+        }
+        let mut shown = self.shown.lock().unwrap_or_else(PoisonError::into_inner);
+        if done < *shown + (total / 50).max(1) {
+            return;
+        }
+        *shown = done;
+        let filled = done * Self::WIDTH / total;
+        eprint!(
+            "\r  {} [{}{}] {:>3}%",
+            self.label,
+            "#".repeat(filled),
+            " ".repeat(Self::WIDTH - filled),
+            done * 100 / total
+        );
+    }
+
+    fn finish(self) {
+        let seconds = self.start.elapsed().as_secs_f64();
+        if self.bar {
+            eprintln!(
+                "\r  {} [{}] 100% {seconds:.2} s",
+                self.label,
+                "#".repeat(Self::WIDTH)
+            );
+        } else {
+            eprintln!(" done in {seconds:.2} s");
+        }
+    }
+}
+
+/// The collision mesh (BVH) of `mesh`, loaded from `path`; shown on stderr if large.
+fn collision_mesh(path: &Path, mesh: TriMesh) -> CollisionMesh {
+    let triangles = mesh.triangle_count();
+    if triangles < PROGRESS_MIN_TRIANGLES {
+        return CollisionMesh::new(mesh);
+    }
+    let progress = Progress::start(
+        format!("{}: BVH of {triangles} triangles", display_name(path)),
+        false,
+    );
+    let cm = CollisionMesh::new(mesh);
+    progress.finish();
+    cm
+}
+
+/// The ADB-tree of `mesh`, loaded from `path`; the progress of its build (BVH included) shown
+/// on stderr if large.
+fn adb_tree(path: &Path, mesh: TriMesh, options: AdbBuildOptions) -> AdbTree {
+    let triangles = mesh.triangle_count();
+    if triangles < PROGRESS_MIN_TRIANGLES {
+        return AdbTree::build_with(CollisionMesh::new(mesh), options);
+    }
+    let progress = Progress::start(
+        format!("{}: ADB tree of {triangles} triangles", display_name(path)),
+        true,
+    );
+    let tree = AdbTree::build_with_progress(CollisionMesh::new(mesh), options, &|p| {
+        progress.update(p.nodes_done, p.nodes_total);
+    });
+    progress.finish();
+    tree
+}
+
 fn run(args: Args) -> Result<(), String> {
     let load = |path: &PathBuf| TriMesh::from_obj(path).map_err(|e| e.to_string());
-    let (mesh_a, mesh_b) = (load(&args.a)?, load(&args.b)?);
+    // The same file for A and B is loaded and built once, and shared.
+    let mesh_a = load(&args.a)?;
+    let mesh_b = if same_file(&args.a, &args.b) {
+        None
+    } else {
+        Some(load(&args.b)?)
+    };
     let poses = read_poses_csv(&args.poses).map_err(|e| e.to_string())?;
+    // Created before the (possibly long) build, so that an unwritable path fails at once.
+    let cannot_write =
+        |path: &PathBuf, e: std::io::Error| format!("cannot write {}: {e}", path.display());
+    let out = match &args.out {
+        Some(path) => Some((
+            path,
+            std::fs::File::create(path).map_err(|e| cannot_write(path, e))?,
+        )),
+        None => None,
+    };
     let rows: Vec<Row> = match &args.mode {
         Mode::Exact(options) => {
-            let a = CollisionMesh::new(mesh_a);
-            let b = CollisionMesh::new(mesh_b);
+            let a = collision_mesh(&args.a, mesh_a);
+            let b_own = mesh_b.map(|mesh| collision_mesh(&args.b, mesh));
+            let b = b_own.as_ref().unwrap_or(&a);
             let mut ws = QueryWorkspace::new();
             poses
                 .iter()
                 .map(|pose_b| {
                     let start = Instant::now();
-                    let outcome =
-                        intersects_with(&a, &Pose::IDENTITY, &b, pose_b, options, &mut ws);
+                    let outcome = intersects_with(&a, &Pose::IDENTITY, b, pose_b, options, &mut ws);
                     let time_ns = start.elapsed().as_nanos();
                     Row {
                         collides: outcome.collides,
@@ -281,14 +454,15 @@ fn run(args: Args) -> Result<(), String> {
                 resolution: *resolution,
                 ..Default::default()
             };
-            let a = AdbTree::build_with(CollisionMesh::new(mesh_a), options);
-            let b = AdbTree::build_with(CollisionMesh::new(mesh_b), options);
+            let a = adb_tree(&args.a, mesh_a, options);
+            let b_own = mesh_b.map(|mesh| adb_tree(&args.b, mesh, options));
+            let b = b_own.as_ref().unwrap_or(&a);
             let mut ws = AdbWorkspace::new();
             poses
                 .iter()
                 .map(|pose_b| {
                     let start = Instant::now();
-                    let outcome = adb_intersects(&a, &Pose::IDENTITY, &b, pose_b, query, &mut ws);
+                    let outcome = adb_intersects(&a, &Pose::IDENTITY, b, pose_b, query, &mut ws);
                     let time_ns = start.elapsed().as_nanos();
                     Row {
                         collides: outcome.collides,
@@ -314,12 +488,9 @@ fn run(args: Args) -> Result<(), String> {
         }
         out.flush()
     };
-    match &args.out {
-        Some(path) => {
-            let mut file = std::fs::File::create(path)
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))?;
-            write(&mut std::io::BufWriter::new(&mut file))
-                .map_err(|e| format!("cannot write {}: {e}", path.display()))
+    match out {
+        Some((path, mut file)) => {
+            write(&mut std::io::BufWriter::new(&mut file)).map_err(|e| cannot_write(path, e))
         }
         None => {
             write(&mut std::io::stdout().lock()).map_err(|e| format!("cannot write to stdout: {e}"))
@@ -328,7 +499,12 @@ fn run(args: Args) -> Result<(), String> {
 }
 
 fn main() -> ExitCode {
-    match parse_args(std::env::args_os().skip(1)).and_then(run) {
+    let result = parse_args(std::env::args_os().skip(1)).and_then(|command| match command {
+        Command::Run(args) => run(args),
+        Command::Help => writeln!(std::io::stdout().lock(), "{USAGE}\n\n{HELP}")
+            .map_err(|e| format!("cannot write to stdout: {e}")),
+    });
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(message) => {
             eprintln!("error: {message}");

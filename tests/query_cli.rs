@@ -366,6 +366,60 @@ fn adb_flag_errors_exit_2() {
         &with(&["--mode", "adb", "--budget-us", "1e30"]),
         "--budget-us: invalid value `1e30`",
     );
+    // A budget that rounds to no time at all is refused like 0; one too large for a
+    // `Duration` (or infinite) is refused, not a panic.
+    for tiny in ["0", "1e-300", "0.0004", "0.0009"] {
+        rejects(
+            &with(&["--mode", "adb", "--budget-us", tiny]),
+            &format!("--budget-us: invalid value `{tiny}` (a number of microseconds, at least"),
+        );
+    }
+    rejects(
+        &with(&["--mode", "adb", "--budget-us", "1e300"]),
+        "--budget-us: invalid value `1e300` (too large",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--budget-us", "1e309"]),
+        "--budget-us: invalid value `1e309`",
+    );
+    // A flag given twice is named, whichever flag it is (the last one no longer wins).
+    for (extra, flag) in [
+        (
+            &["--mode", "adb", "--budget-us", "20", "--budget-us", "30"][..],
+            "--budget-us",
+        ),
+        (
+            &[
+                "--mode",
+                "adb",
+                "--budget-nodes",
+                "5",
+                "--budget-nodes",
+                "9",
+            ],
+            "--budget-nodes",
+        ),
+        (
+            &["--mode", "adb", "--p-min", "0.5", "--p-min", "0.9"],
+            "--p-min",
+        ),
+        (
+            &[
+                "--mode",
+                "adb",
+                "--order",
+                "best-first",
+                "--order",
+                "best-first",
+            ],
+            "--order",
+        ),
+        (&["--mode", "exact", "--solid", "--solid"], "--solid"),
+        (&["--mode", "exact", "--mode", "adb"], "--mode"),
+        (&["--mode", "exact", "--a", "/other.obj"], "--a"),
+    ] {
+        rejects(&with(extra), &format!("{flag} given twice"));
+    }
     #[cfg(unix)]
     {
         use std::ffi::OsStr;
@@ -390,4 +444,98 @@ fn adb_flag_errors_exit_2() {
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");
         assert!(err.contains("--mode: invalid value"), "{err}");
     }
+}
+
+#[test]
+fn help_prints_the_usage_to_stdout_and_exits_0() {
+    for args in [&["--help"][..], &["-h"], &["--mode", "adb", "--help"]] {
+        let out = run(args);
+        assert_eq!(out.status.code(), Some(0), "args {args:?}");
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(text.starts_with("usage: query --a A.obj"), "{text}");
+        assert!(text.contains("--budget-us"), "{text}");
+        assert!(
+            out.stderr.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    // Bad usage still exits 2 with one line on stderr, nothing on stdout.
+    let out = run(&["--bogus"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(out.stdout.is_empty());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(
+        err.starts_with("error: unknown argument `--bogus`; usage:"),
+        "{err}"
+    );
+}
+
+#[test]
+fn large_meshes_show_build_progress_on_stderr_and_a_shared_path_builds_once() {
+    // 20 480 triangles: at the threshold from which builds show their progress.
+    let mesh = generate::icosphere(1.0, 5);
+    assert!(mesh.triangle_count() >= 20_000);
+    let big = scratch("big_ball.obj");
+    write_obj(&big, &mesh);
+    let copy = scratch("big_ball_copy.obj");
+    std::fs::copy(&big, &copy).unwrap();
+    let poses = scratch("big_ball_poses.csv");
+    std::fs::write(
+        &poses,
+        "tx,ty,tz,qx,qy,qz,qw\n1.5,0,0,0,0,0,1\n5,0,0,0,0,0,1\n",
+    )
+    .unwrap();
+    let (big, copy, poses) = (
+        big.to_str().unwrap(),
+        copy.to_str().unwrap(),
+        poses.to_str().unwrap(),
+    );
+    // Returns the stderr lines naming each mesh's build (`what`); checks the CSV on stdout.
+    let builds = |b: &str, mode: &str, what: &str| {
+        let out = run(&["--a", big, "--b", b, "--poses", poses, "--mode", mode]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let rows = rows(&out.stdout);
+        assert_eq!(rows.len(), 2);
+        assert_eq!((rows[0][1].as_str(), rows[1][1].as_str()), ("1", "0"));
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert!(err.ends_with('\n'), "stderr `{err}` does not end its line");
+        assert!(!err.contains("error") && !err.contains("panicked"), "{err}");
+        let lines: Vec<String> = err
+            .lines()
+            .filter(|l| l.contains(what))
+            .map(str::to_string)
+            .collect();
+        assert!(
+            lines.iter().all(|l| l.contains("20480 triangles")),
+            "{lines:?}"
+        );
+        lines
+    };
+    // The same path is loaded and built once (one progress line), another path twice.
+    let same = builds(big, "adb", "ADB tree");
+    assert_eq!(same.len(), 1, "{same:?}");
+    assert!(same[0].contains("big_ball.obj"), "{same:?}");
+    let two = builds(copy, "adb", "ADB tree");
+    assert_eq!(two.len(), 2, "{two:?}");
+    assert!(two[1].contains("big_ball_copy.obj"), "{two:?}");
+    assert_eq!(builds(big, "exact", "BVH").len(), 1);
+    assert_eq!(builds(copy, "exact", "BVH").len(), 2);
+
+    // A small mesh builds silently: stderr stays empty.
+    let small = scratch("small_ball.obj");
+    write_obj(&small, &generate::icosphere(1.0, 2));
+    let s = small.to_str().unwrap();
+    let out = run(&["--a", s, "--b", s, "--poses", poses, "--mode", "adb"]);
+    assert!(out.status.success());
+    assert!(
+        out.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 }
