@@ -7,8 +7,12 @@
 //! `support/cannonball.rs`, `embed`): the way a game adds its own reaction to contacts.
 //!
 //! ```text
-//! cargo run --release --example cannonball -- [SHOTS] [P_MIN] [NODE_PAIRS_PER_FRAME]
+//! cargo run --release --example cannonball -- [SHOTS] [P_MIN] [NODE_PAIRS_PER_FRAME] [COLLIDE_AT]
 //! ```
+//!
+//! `COLLIDE_AT` (default 0.2): the confidence from which an ADB answer its traversal did not
+//! settle counts as a hit (`CollisionConfig::adb_collide_at`): a missed hit loses the shot,
+//! a false one stops it a frame early.
 mod support;
 
 use std::time::Duration;
@@ -24,10 +28,13 @@ struct Run {
     collision: Duration,
 }
 
-fn simulate(options: &Options, fidelity: Fidelity, frames: usize) -> Run {
+fn simulate(options: &Options, fidelity: Fidelity, collide_at: f64, frames: usize) -> Run {
     let mut app = App::new();
     app.add_plugins(options.plugin());
     cannonball::setup(&mut app, options, Some(fidelity));
+    app.world_mut()
+        .resource_mut::<CollisionConfig>()
+        .adb_collide_at = collide_at;
     let mut collision = Duration::ZERO;
     for _ in 0..frames {
         app.update();
@@ -53,6 +60,10 @@ fn main() {
     let shots = args.next().and_then(|a| a.parse().ok()).unwrap_or(300);
     let p_min = args.next().and_then(|a| a.parse().ok()).unwrap_or(0.5);
     let node_budget = args.next().and_then(|a| a.parse().ok()).unwrap_or(1000);
+    let collide_at = args
+        .next()
+        .and_then(|a| a.parse().ok())
+        .unwrap_or(cannonball::COLLIDE_AT);
     let frames = 150;
     // ADB gets a small work budget per frame: what a game would give a background effect.
     let options = Options {
@@ -60,7 +71,7 @@ fn main() {
         node_budget: Some(node_budget),
         ..Options::default()
     };
-    let adb = simulate(&options, Fidelity::Adb { p_min }, frames);
+    let adb = simulate(&options, Fidelity::Adb { p_min }, collide_at, frames);
     let exact = simulate(
         &Options {
             budget_us: 0,
@@ -68,6 +79,7 @@ fn main() {
             ..options.clone()
         },
         Fidelity::Exact,
+        collide_at,
         frames,
     );
     let both = |f: fn(&Option<u64>, &Option<u64>) -> bool| {
@@ -89,7 +101,7 @@ fn main() {
         .collect();
     let mean_delay = late.iter().sum::<i64>() as f64 / late.len().max(1) as f64;
     println!(
-        "cannonball: {shots} shots, {frames} frames, ADB p_min = {p_min} within {node_budget} node pairs per frame vs exact"
+        "cannonball: {shots} shots, {frames} frames, ADB p_min = {p_min} within {node_budget} node pairs per frame, hit from confidence {collide_at}, vs exact"
     );
     println!("  exact: {hits_exact} shots hit the castle; ADB: {hits_adb}");
     println!(

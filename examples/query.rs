@@ -14,7 +14,7 @@
 //! Modes:
 //! - `exact` (BVH + exact triangle tests). `--solid` also counts a mesh inside a closed other
 //!   mesh as colliding.
-//! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--budget-us T |
+//! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--collide-at 0.5] [--budget-us T |
 //!   --budget-nodes N] [--leaves exact|estimated] [--decision evidence|confidence]
 //!   [--order depth-first|evidence-first|best-first] [--estimator calibrated|paper|planarity]
 //!   [--resolution 4]`; `probability` is the ADB confidence, `nodes_visited` the node pairs
@@ -25,6 +25,8 @@
 //!   order), `evidence-first` the pairs that count as evidence best first, then the others depth
 //!   first (`Order::EvidenceFirst`); default `depth-first`: the most promising child of the pair
 //!   just expanded next (`Order::DepthFirst`).
+//!   `--collide-at C`: the confidence from which an answer the traversal did not settle says
+//!   "collision" (`AdbQuery::collide_at`).
 //!   `--estimator paper` is the papers' method as published: their decision rule (so no
 //!   `--decision`), best-first order and estimated leaves unless `--order` or `--leaves` say
 //!   otherwise.
@@ -56,7 +58,8 @@ use stochastic_collision::poses::read_poses_csv;
 use cli::{DECISIONS, ORDERS, parse_choice};
 
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
-[--p-min P] [--k-min K] [--budget-us T | --budget-nodes N] [--leaves exact|estimated] \
+[--p-min P] [--k-min K] [--collide-at C] [--budget-us T | --budget-nodes N] \
+[--leaves exact|estimated] \
 [--decision evidence|confidence] [--order depth-first|evidence-first|best-first] \
 [--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
 
@@ -67,8 +70,9 @@ mesh A (at identity) and writes the CSV index,collides,probability,time_ns,nodes
 --out, else to stdout.
   --mode exact      BVH and exact triangle tests (--solid: a mesh inside a closed other one
                     collides too)
-  --mode adb        ADB-tree: --p-min (0.99) and --k-min (10) set the decision, --budget-us or
-                    --budget-nodes a budget per query, --leaves, --decision, --order and
+  --mode adb        ADB-tree: --p-min (0.99) and --k-min (10) set the decision, --collide-at
+                    (0.5) the confidence from which an unsettled answer is a collision,
+                    --budget-us or --budget-nodes a budget per query, --leaves, --decision, --order and
                     --estimator the traversal, --resolution (4) the cells per axis
 Bad input exits with code 2 and one line on stderr.";
 
@@ -143,6 +147,13 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Command, String>
                     (0.0..=1.0).contains(&p)
                 })?;
                 adb_flags.push("--p-min");
+            }
+            "--collide-at" => {
+                adb.collide_at =
+                    parse_number(&value("--collide-at")?, "--collide-at", |c: f64| {
+                        (0.0..=1.0).contains(&c)
+                    })?;
+                adb_flags.push("--collide-at");
             }
             "--k-min" => {
                 adb.k_min = parse_number(&value("--k-min")?, "--k-min", |k: u32| k >= 1)?;

@@ -222,6 +222,49 @@ fn budgeted_confidence_is_calibrated_against_the_exact_answer() {
     );
 }
 
+/// `collide_at` decides only the answers the traversal did not settle, and only by their
+/// confidence: the same traversal and confidence whatever its value, "collision" for at least
+/// as many poses when it is lower, and never for a pose whose every pair was ruled out.
+#[test]
+fn collide_at_moves_only_the_unsettled_answers() {
+    let mut ws = AdbWorkspace::new();
+    let trees = trees();
+    let (_, t) = &trees[0];
+    let m = t.collision_mesh();
+    let poses = near_contact_poses(m, m, 48, 0.1, 33);
+    let (mut moved, mut unsettled) = (0, 0);
+    for p in &poses {
+        let at = |collide_at: f64| {
+            let query = AdbQuery {
+                collide_at,
+                ..AdbQuery::with_budget(Budget::NodePairs(60))
+            };
+            adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &query, &mut ws)
+        };
+        let [zero, low, half, high] = [0.0, 0.2, 0.5, 0.8].map(at);
+        for o in [&zero, &low, &high] {
+            assert_eq!(o.probability, half.probability);
+            assert_eq!(o.node_pairs_visited, half.node_pairs_visited);
+        }
+        assert!(high.collides <= half.collides && half.collides <= low.collides);
+        assert!(low.collides <= zero.collides);
+        if half.probability == 0.0 {
+            assert!(!zero.collides, "no pair left, yet a collision");
+        }
+        let settled = half.probability == 0.0 || half.probability == 1.0;
+        if settled {
+            assert!(zero.collides == high.collides, "a settled answer moved");
+        } else {
+            unsettled += 1;
+        }
+        moved += usize::from(low.collides != high.collides);
+    }
+    assert!(
+        unsettled > 0 && moved > 0,
+        "{unsettled} unsettled, {moved} moved"
+    );
+}
+
 #[test]
 fn a_tiny_time_budget_is_reported_as_exhausted() {
     let trees = trees();

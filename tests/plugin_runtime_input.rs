@@ -271,3 +271,32 @@ fn the_configured_adb_order_is_the_one_the_queries_use() {
         "{evidence_first} ≥ {best_first}"
     );
 }
+
+#[test]
+fn the_configured_adb_collide_at_decides_unsettled_answers() {
+    // Balls a hair apart along a diagonal (so that their boxes overlap), estimated leaves:
+    // the traversal leaves its leaf pairs to their
+    // estimates, so the answer is a confidence strictly between 0 and 1, and the configured
+    // threshold alone decides it.
+    let outcome = |adb_collide_at: f64| {
+        let config = CollisionConfig {
+            budget: FrameBudget::Unlimited,
+            adb_exact_leaves: false,
+            adb_collide_at,
+            ..Default::default()
+        };
+        let mut app = app_with(config, 1);
+        spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
+        spawn(&mut app, (ball(1.0), at(1.42, 1.42, 0.0)));
+        app.update();
+        app.world().resource::<PairOutcomes>().outcomes()[0].clone()
+    };
+    let (eager, strict) = (outcome(1e-6), outcome(1.0));
+    assert_eq!(eager.method, Method::Adb);
+    assert!(
+        eager.probability > 0.0 && eager.probability < 1.0,
+        "{eager:?}"
+    );
+    assert_eq!(eager.probability, strict.probability);
+    assert!(eager.collides && !strict.collides, "{eager:?} {strict:?}");
+}

@@ -242,6 +242,14 @@ fn adb_mode_answers_with_confidences_and_node_budgets_are_repeatable() {
     for (a, b) in x.iter().zip(&y) {
         assert_eq!((&a[1], &a[2], &a[4]), (&b[1], &b[2], &b[4]));
     }
+    // --collide-at moves only the decision: the same confidences and node pairs, "collision"
+    // on at least as many poses when it is lower.
+    let eager = run_adb(&["--budget-nodes", "50", "--collide-at", "0.01"]);
+    let strict = run_adb(&["--budget-nodes", "50", "--collide-at", "1"]);
+    for (a, b) in eager.iter().zip(&strict) {
+        assert_eq!((&a[2], &a[4]), (&b[2], &b[4]));
+        assert!(a[1] >= b[1], "{a:?} {b:?}");
+    }
     // Exact leaves (the default, and asked for with the papers' estimator) with p_min = 1
     // answer exactly.
     let exact = run(&["--a", m, "--b", m, "--poses", p, "--mode", "exact"]);
@@ -306,6 +314,14 @@ fn adb_flag_errors_exit_2() {
     rejects(
         &with(&["--mode", "adb", "--k-min", "0"]),
         "--k-min: invalid value `0`",
+    );
+    rejects(
+        &with(&["--mode", "adb", "--collide-at", "1.5"]),
+        "--collide-at: invalid value `1.5`",
+    );
+    rejects(
+        &with(&["--mode", "exact", "--collide-at", "0.2"]),
+        "--collide-at",
     );
     rejects(
         &with(&["--mode", "adb", "--budget-us", "-5"]),

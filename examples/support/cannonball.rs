@@ -24,6 +24,10 @@ pub struct Shot {
     pub hit_at: Option<Vec3>,
 }
 
+/// The confidence from which the shots' unsettled ADB answers count as hits
+/// ([`CollisionConfig::adb_collide_at`]).
+pub const COLLIDE_AT: f64 = 0.2;
+
 /// Sets the scene up; `fidelity` overrides the shots' fidelity (default: ADB, `p_min = 0.5`).
 pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
     app.add_systems(PostUpdate, fly.before(CollisionSystems::Prepare))
@@ -52,6 +56,9 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
         let mut config = world.resource_mut::<CollisionConfig>();
         config.k_min = 2;
         config.adb_exact_leaves = false;
+        // A missed hit loses the shot (the ball passes through the wall); a false one stops it
+        // a frame early: an unsettled answer counts as a hit from a confidence of 0.2.
+        config.adb_collide_at = COLLIDE_AT;
     }
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(options.seed);
     for _ in 0..options.count(DEFAULT_SHOTS) {

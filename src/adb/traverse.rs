@@ -77,6 +77,14 @@ pub struct AdbQuery {
     pub decision: Decision,
     /// In which order node pairs are expanded.
     pub order: Order,
+    /// For [`Decision::Confidence`] and [`Decision::Evidence`]: the confidence from which an
+    /// answer the traversal did not settle (no exact hit, no `k_min` pieces of evidence, not
+    /// every pair ruled out: a budget ran out, or leaf pairs were left to their estimates) says
+    /// "collision". ½ (the default) makes the fewest errors when the confidence is calibrated;
+    /// lower it where a missed contact costs more than a false one (a fast projectile that
+    /// would pass through a wall), raise it where a false contact costs more. An answer with
+    /// confidence 0 never says "collision".
+    pub collide_at: f64,
 }
 
 /// The order in which [`adb_intersects`] expands node pairs. Whichever the order, a pair's
@@ -135,7 +143,8 @@ pub enum Decision {
     /// `r` = [`EVIDENCE_REDUNDANCY`]: `k_min` such pairs, worth `k_min / r` independent ones,
     /// together give at least `p_min` (0.60 per pair for the defaults 0.99 and 10).
     /// Without `k_min` of them, "collision" iff the reported confidence
-    /// ([`AdbOutcome::probability`]) is at least ½. The default.
+    /// ([`AdbOutcome::probability`]) is at least [`AdbQuery::collide_at`] (½ by default). The
+    /// default.
     #[default]
     Confidence,
     /// [`Decision::Confidence`], and besides: "collision" as soon as the pairs that count as
@@ -166,6 +175,7 @@ impl Default for AdbQuery {
             p_prune: 0.0,
             decision: Decision::Confidence,
             order: Order::DepthFirst,
+            collide_at: 0.5,
         }
     }
 }
@@ -533,7 +543,9 @@ pub fn adb_intersects(
         out.probability = (1.0 - log_miss.exp()).clamp(0.0, 1.0);
         if !out.collides {
             out.collides = match query.decision {
-                Decision::Confidence | Decision::Evidence => out.probability >= 0.5,
+                Decision::Confidence | Decision::Evidence => {
+                    out.probability > 0.0 && out.probability >= query.collide_at
+                }
                 Decision::Paper => out.budget_exhausted && out.pairs_found >= 1,
             };
         }

@@ -764,6 +764,7 @@ impl Context<'_> {
             exact_leaves: self.config.adb_exact_leaves,
             decision: self.config.adb_decision,
             order: self.config.adb_order,
+            collide_at: self.config.adb_collide_at,
             ..AdbQuery::default()
         }
     }

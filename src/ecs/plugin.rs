@@ -66,6 +66,12 @@ pub struct CollisionConfig {
     /// than [`Order::EvidenceFirst`], and near first contact far fewer than the papers' best
     /// first (the `accuracy_vs_time` report).
     pub adb_order: Order,
+    /// The confidence from which an ADB answer that its traversal did not settle (its slice
+    /// ran out, or leaf pairs were left to their estimates) counts as a collision
+    /// ([`AdbQuery::collide_at`](crate::adb::AdbQuery::collide_at); ½ by default, the fewest
+    /// errors). Lower it where a missed contact costs more than a false one, as the
+    /// `cannonball` example does for shots that would otherwise pass through the wall.
+    pub adb_collide_at: f64,
     /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
     /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
     /// (the pairs tested were chosen by what a test costs; one cut short would be wasted),
@@ -97,6 +103,7 @@ impl Default for CollisionConfig {
             adb_exact_leaves: true,
             adb_decision: Decision::Confidence,
             adb_order: Order::DepthFirst,
+            adb_collide_at: 0.5,
             min_slice: 4,
             max_slice: 4096,
             seed: 0x5eed,
