@@ -1051,6 +1051,9 @@ fn plot_error_vs_distance(
             .configure_mesh()
             .x_desc("offset from first contact (fraction of size; < 0 overlapping)")
             .y_desc("error (%)")
+            // The middle tick lands a rounding error off 0: no "-0.00".
+            .x_label_formatter(&|v| format!("{:.2}", if v.abs() < 1e-6 { 0.0 } else { *v }))
+            .light_line_style(TRANSPARENT)
             .draw()?;
         for (i, (name, pts)) in curves.into_iter().enumerate() {
             draw_curve(&mut chart, &pts, name, palette(i), 3)?;
