@@ -683,6 +683,10 @@ fn variants_table(
         order.join(" | ")
     )?;
     writeln!(table, "|---|{}", "---:|".repeat(order.len()))?;
+    let exact_medians: Vec<f64> = order
+        .iter()
+        .map(|name| stats(&all[name], |r| r.exact).median_us)
+        .collect();
     let rows = configs.iter().enumerate().filter(|(_, c)| {
         c.label == DEFAULT_LABEL
             || (c.family == "estimator" && !HEADLINE_LABELS.contains(&c.label.as_str()))
@@ -690,16 +694,14 @@ fn variants_table(
     });
     for (k, c) in rows {
         write!(table, "| {} |", c.label)?;
-        for name in order {
-            let records = &all[name];
-            let exact = stats(records, |r| r.exact);
-            let s = stats(records, |r| r.adb[k]);
+        for (name, exact_median) in order.iter().zip(&exact_medians) {
+            let s = stats(&all[name], |r| r.adb[k]);
             write!(
                 table,
                 " {:.1} · {:.3} · {:.2}× |",
                 s.error,
                 s.brier,
-                s.median_us / exact.median_us
+                s.median_us / exact_median
             )?;
         }
         writeln!(table)?;
@@ -1058,12 +1060,7 @@ fn plot_error_vs_distance(
         for (i, (name, pts)) in curves.into_iter().enumerate() {
             draw_curve(&mut chart, &pts, name, palette(i), 3)?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .draw()?;
+        legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     }
     root.present()?;
     Ok(())
@@ -1196,17 +1193,29 @@ where
 fn finish<'a, X>(
     chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
     root: &DrawingArea<SVGBackend<'a>, Shift>,
-    legend: SeriesLabelPosition,
+    position: SeriesLabelPosition,
+) -> Result<(), Box<dyn std::error::Error>>
+where
+    X: Ranged<ValueType = f64>,
+{
+    legend(chart, position)?;
+    root.present()?;
+    Ok(())
+}
+
+/// The legend box of a chart, at `position`.
+fn legend<'a, X>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    position: SeriesLabelPosition,
 ) -> Result<(), Box<dyn std::error::Error>>
 where
     X: Ranged<ValueType = f64>,
 {
     chart
         .configure_series_labels()
-        .position(legend)
+        .position(position)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .draw()?;
-    root.present()?;
     Ok(())
 }
