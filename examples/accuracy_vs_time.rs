@@ -204,16 +204,34 @@ fn configs() -> Vec<Config> {
         family: "estimator",
         query: variant(Decision::Confidence, false),
     });
-    for (label, order) in [
-        ("calibrated p0.99 k10 evidence-first", Order::EvidenceFirst),
-        ("calibrated p0.99 k10 best-first", Order::BestFirst),
+    for (label, order, budget) in [
+        (
+            "calibrated p0.99 k10 depth-first",
+            Order::DepthFirst,
+            Budget::Unlimited,
+        ),
+        (
+            "calibrated p0.99 k10 depth-first 20us",
+            Order::DepthFirst,
+            Budget::Time(Duration::from_micros(20)),
+        ),
+        (
+            "calibrated p0.99 k10 evidence-first",
+            Order::EvidenceFirst,
+            Budget::Unlimited,
+        ),
+        (
+            "calibrated p0.99 k10 best-first",
+            Order::BestFirst,
+            Budget::Unlimited,
+        ),
     ] {
         out.push(Config {
             label: label.into(),
             family: "estimator",
             query: AdbQuery {
                 order,
-                ..tuned(0.99, 10, 0.0, Budget::Unlimited)
+                ..tuned(0.99, 10, 0.0, budget)
             },
         });
     }

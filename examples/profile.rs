@@ -5,7 +5,7 @@
 //! cargo run --release --example profile -- --scene pile|cannonball|cloth|intestine \
 //!     [--frames N] [--entities N] [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
 //!     [--adb-decision confidence|evidence] \
-//!     [--adb-order depth-first|evidence-first|best-first] \
+//!     [--adb-order straddle|depth-first|evidence-first|best-first] \
 //!     [--json out.json] [--svg out.svg]
 //! ```
 //!
@@ -14,7 +14,7 @@
 //! budget of N ADB node pairs per frame (deterministic: the same run for any thread count,
 //! which is how to compare thread counts fairly). `--adb-decision` sets how the ADB queries
 //! decide (`CollisionConfig::adb_decision`, default `confidence`), `--adb-order` in which order
-//! they expand node pairs (`CollisionConfig::adb_order`, default `depth-first`).
+//! they expand node pairs (`CollisionConfig::adb_order`, default `straddle`).
 //!
 //! JSON fields: `scene`, `frames`, `threads`, `budget_us`, `stages` (by name: `mean_us`,
 //! `p50_us`, `p99_us` over the frames the stage ran, `runs`), `collision_p99_us` (Prepare to
@@ -102,7 +102,7 @@ fn main() {
                 "{e}\nusage: profile --scene pile|cannonball|cloth|intestine [--frames N] [--entities N] \
                  [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
                  [--adb-decision confidence|evidence] \
-                 [--adb-order depth-first|evidence-first|best-first] \
+                 [--adb-order straddle|depth-first|evidence-first|best-first] \
                  [--json out.json] [--svg out.svg]"
             );
             std::process::exit(2);

@@ -16,15 +16,17 @@
 //!   mesh as colliding.
 //! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--collide-at 0.5] [--budget-us T |
 //!   --budget-nodes N] [--leaves exact|estimated] [--decision evidence|confidence]
-//!   [--order depth-first|evidence-first|best-first] [--estimator calibrated|paper|planarity]
+//!   [--order straddle|depth-first|evidence-first|best-first] [--estimator calibrated|paper|planarity]
 //!   [--resolution 4]`; `probability` is the ADB confidence, `nodes_visited` the node pairs
 //!   visited. `--leaves estimated` never tests a triangle (default: leaf pairs are tested
 //!   exactly); `--decision evidence` stops as soon as the evidence found reaches `p_min`
 //!   (`Decision::Evidence`; default `confidence`: waits for `k_min` pieces of evidence);
 //!   `--order best-first` expands the most probable pair of the whole queue next (the papers'
 //!   order), `evidence-first` the pairs that count as evidence best first, then the others depth
-//!   first (`Order::EvidenceFirst`); default `depth-first`: the most promising child of the pair
-//!   just expanded next (`Order::DepthFirst`).
+//!   first (`Order::EvidenceFirst`), `depth-first` the most promising child of the pair just
+//!   expanded next (`Order::DepthFirst`); default `straddle`: depth first by how squarely the
+//!   boxes straddle each other's surface, with exact leaves estimating only the pairs its
+//!   evidence checks and its confidence need (`Order::Straddle`).
 //!   `--collide-at C`: the confidence from which an answer the traversal did not settle says
 //!   "collision" (`AdbQuery::collide_at`).
 //!   `--estimator paper` is the papers' method as published: their decision rule (so no
@@ -60,7 +62,7 @@ use cli::{DECISIONS, ORDERS, parse_choice};
 const USAGE: &str = "usage: query --a A.obj --b B.obj --poses poses.csv --mode exact|adb [--solid] \
 [--p-min P] [--k-min K] [--collide-at C] [--budget-us T | --budget-nodes N] \
 [--leaves exact|estimated] \
-[--decision evidence|confidence] [--order depth-first|evidence-first|best-first] \
+[--decision evidence|confidence] [--order straddle|depth-first|evidence-first|best-first] \
 [--estimator calibrated|paper|planarity] [--resolution R] [--out results.csv]";
 
 /// What `--help` prints after the usage.

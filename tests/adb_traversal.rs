@@ -13,7 +13,12 @@ use stochastic_collision::mesh::generate;
 use stochastic_collision::poses::near_contact_poses;
 
 /// Every traversal order.
-const ORDERS: [Order; 3] = [Order::DepthFirst, Order::EvidenceFirst, Order::BestFirst];
+const ORDERS: [Order; 4] = [
+    Order::Straddle,
+    Order::DepthFirst,
+    Order::EvidenceFirst,
+    Order::BestFirst,
+];
 
 fn trees() -> Vec<(&'static str, AdbTree)> {
     let opts = AdbBuildOptions::default();
@@ -453,7 +458,7 @@ fn every_order_finds_every_collision_and_its_hits_are_real() {
     }
 }
 
-/// Depth first (the default) reaches a first intersecting triangle pair after fewer node pairs
+/// Depth first reaches a first intersecting triangle pair after fewer node pairs
 /// than evidence first, summed over the colliding poses of each closed mesh with its copy, at
 /// the same answers (exact leaves, `p_min = 1`: every answer is the exact one). (On the flat
 /// cloth grid the two are within a few per cent, either way: `Order::DepthFirst`.)
@@ -488,4 +493,120 @@ fn depth_first_visits_fewer_node_pairs_than_evidence_first_on_collisions() {
             "{name}: depth first {depth_first} ≥ evidence first {evidence_first}"
         );
     }
+}
+
+/// Counts the estimates it gives.
+#[derive(Debug, Default)]
+struct CountingEstimator {
+    base: CalibratedEstimator,
+    calls: std::sync::atomic::AtomicU64,
+}
+
+impl CollisionEstimator for CountingEstimator {
+    fn probability(&self, pair: &stochastic_collision::adb::NodePair<'_>) -> f64 {
+        self.calls
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.base.probability(pair)
+    }
+    fn name(&self) -> &'static str {
+        "counting"
+    }
+}
+
+/// `Order::Straddle` with exact leaves estimates a pair only at its evidence checks and for the
+/// confidence of an unsettled answer: far fewer estimates than depth first, which estimates
+/// every overlapping pair it meets, for the same (exact, `p_min = 1`) answers.
+#[test]
+fn straddle_estimates_only_what_its_answers_need() {
+    let mut ws = AdbWorkspace::new();
+    for (name, t) in &trees() {
+        let m = t.collision_mesh();
+        let poses = near_contact_poses(m, m, 30, 0.15, 71);
+        let mut calls = [0u64; 2];
+        let mut visited = [0u64; 2];
+        for (i, order) in [Order::Straddle, Order::DepthFirst].into_iter().enumerate() {
+            let counting = Arc::new(CountingEstimator::default());
+            let query = AdbQuery {
+                order,
+                p_min: 1.0,
+                estimator: counting.clone(),
+                ..AdbQuery::default()
+            };
+            let mut answers = Vec::new();
+            for p in &poses {
+                let o = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &query, &mut ws);
+                visited[i] += o.node_pairs_visited;
+                answers.push(o.collides);
+            }
+            calls[i] = counting.calls.load(std::sync::atomic::Ordering::Relaxed);
+            let mut exact_ws = QueryWorkspace::new();
+            for (p, collides) in poses.iter().zip(answers) {
+                let truth = intersects(m, &Pose::IDENTITY, m, &p.pose, &mut exact_ws);
+                assert_eq!(collides, truth, "{name} {order:?}");
+            }
+        }
+        let [straddle, depth_first] = calls;
+        assert!(depth_first > 0, "{name}");
+        assert!(
+            straddle * 5 < depth_first,
+            "{name}: straddle {straddle} estimates, depth first {depth_first}"
+        );
+        // Depth first estimates every overlapping pair it meets: at least one per visited
+        // pair beyond the roots, bar the pairs whose boxes do not overlap.
+        assert!(
+            depth_first * 4 >= visited[1],
+            "{name}: {depth_first} of {}",
+            visited[1]
+        );
+    }
+}
+
+/// Estimated on demand, the evidence still decides: over deep overlaps with a low bar,
+/// `Order::Straddle` answers colliding poses from `k_min` pieces of evidence (at its checks, or
+/// over the frontier a node budget left) before any triangle hit, always with at least `k_min`
+/// pairs, a confidence of at least `p_min` and a contact region; and every budget-cut answer
+/// reports its frontier's confidence and a contact region.
+#[test]
+fn straddle_still_decides_on_evidence_and_reports_its_frontier() {
+    let mut ws = AdbWorkspace::new();
+    let (mut on_evidence, mut cut) = (0, 0);
+    for (name, t) in &trees() {
+        let m = t.collision_mesh();
+        let evidence = AdbQuery {
+            p_min: 0.6,
+            k_min: 2,
+            ..AdbQuery::default()
+        };
+        assert_eq!(evidence.order, Order::Straddle);
+        for p in near_contact_poses(m, m, 40, 0.3, 72) {
+            for budget in [Budget::Unlimited, Budget::NodePairs(24)] {
+                let q = AdbQuery {
+                    budget,
+                    ..evidence.clone()
+                };
+                let o = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &q, &mut ws);
+                if o.collides && o.probability < 1.0 && o.pairs_found >= q.k_min {
+                    on_evidence += 1;
+                    assert!(o.probability >= q.p_min - 1e-9, "{name}: {o:?}");
+                    assert!(o.witness.is_some_and(|w| w.triangles.is_none()), "{name}");
+                }
+                let d = AdbQuery {
+                    budget,
+                    ..AdbQuery::default()
+                };
+                let o = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &d, &mut ws);
+                if o.budget_exhausted {
+                    cut += 1;
+                    assert!((0.0..1.0).contains(&o.probability), "{name}: {o:?}");
+                    assert!(
+                        o.probability > 0.0,
+                        "{name}: an open frontier estimated at 0"
+                    );
+                    assert!(o.witness.is_some(), "{name}: {o:?}");
+                }
+            }
+        }
+    }
+    assert!(on_evidence >= 10, "{on_evidence} answers on evidence");
+    assert!(cut >= 20, "{cut} budget-cut answers");
 }

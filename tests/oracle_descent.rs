@@ -64,7 +64,12 @@ fn oracle_descent_is_exact_and_no_traversal_beats_it() {
                 "{steps} steps, leaf depths {min_a}..={max_a} and {min_b}..={max_b}"
             );
             assert!(n <= exact_pairs, "oracle {n} > exact query {exact_pairs}");
-            for order in [Order::DepthFirst, Order::EvidenceFirst, Order::BestFirst] {
+            for order in [
+                Order::Straddle,
+                Order::DepthFirst,
+                Order::EvidenceFirst,
+                Order::BestFirst,
+            ] {
                 let q = certain(order);
                 let out = adb_intersects(ta, &Pose::IDENTITY, tb, &p.pose, &q, &mut adb_ws);
                 assert!(out.collides);

@@ -10,6 +10,7 @@ pub const DECISIONS: &[(&str, Decision)] = &[
 /// The names of the ADB traversal orders (`--order`, `--adb-order`).
 pub const ORDERS: &[(&str, Order)] = &[
     ("depth-first", Order::DepthFirst),
+    ("straddle", Order::Straddle),
     ("evidence-first", Order::EvidenceFirst),
     ("best-first", Order::BestFirst),
 ];

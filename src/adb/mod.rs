@@ -10,10 +10,10 @@
 //! - [`CollisionEstimator`]: the pluggable probability model ([`PaperEstimator`], and
 //!   [`PlanarityEstimator`] whose curvature term comes from the mesh).
 //! - [`adb_intersects`]: the probability-guided traversal (the papers' best-first priority
-//!   queue, evidence first and then depth first, or depth first: [`Order`]) with `p_min`,
-//!   `k_min`, budgets (node pairs or time) and optional exact leaves; its [`AdbOutcome`] says
-//!   whether the meshes collide, with what confidence, whether the budget ran out, and where
-//!   the contact probably is.
+//!   queue, evidence first and then depth first, depth first, or by default depth first with
+//!   estimates on demand: [`Order`]) with `p_min`, `k_min`, budgets (node pairs or time) and
+//!   optional exact leaves; its [`AdbOutcome`] says whether the meshes collide, with what
+//!   confidence, whether the budget ran out, and where the contact probably is.
 
 pub mod cells;
 mod estimator;
@@ -31,6 +31,6 @@ pub use estimator::{
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
 pub use traverse::{
     AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, EVIDENCE_REDUNDANCY,
-    MAX_ESTIMATE, Order, STRADDLE_FLOOR, TIME_CHECK_INTERVAL, adb_intersects,
+    FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR, TIME_CHECK_INTERVAL, adb_intersects,
 };
 pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};

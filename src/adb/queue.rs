@@ -6,7 +6,8 @@ use std::collections::BinaryHeap;
 use super::traverse::Order;
 
 /// The pairs waiting to be expanded, in the query's [`Order`]: a max-heap, and a stack (for
-/// [`Order::EvidenceFirst`] the pairs below the evidence bar, for [`Order::DepthFirst`] all).
+/// [`Order::EvidenceFirst`] the pairs below the evidence bar, for [`Order::DepthFirst`] and
+/// [`Order::Straddle`] all).
 #[derive(Debug, Default)]
 pub(super) struct Queue {
     heap: BinaryHeap<Entry>,
@@ -28,7 +29,7 @@ impl Queue {
         match self.order {
             Order::BestFirst => self.heap.pop(),
             Order::EvidenceFirst => self.heap.pop().or_else(|| self.stack.pop()),
-            Order::DepthFirst => self.stack.pop(),
+            Order::DepthFirst | Order::Straddle => self.stack.pop(),
         }
     }
 
@@ -37,7 +38,7 @@ impl Queue {
     pub(super) fn push(&mut self, e: Entry) {
         match self.order {
             Order::EvidenceFirst if e.p < self.evidence_bar => self.stack.push(e),
-            Order::DepthFirst => self.stack.push(e),
+            Order::DepthFirst | Order::Straddle => self.stack.push(e),
             _ => self.heap.push(e),
         }
     }
@@ -53,6 +54,13 @@ impl Queue {
         }
     }
 
+    /// The stacked pairs, to update in place (the heap, whose order depends on them, is not
+    /// included: only [`Order::Straddle`] updates its pairs, and it uses only the stack).
+    pub(super) fn stack_mut(&mut self) -> &mut [Entry] {
+        debug_assert!(self.heap.is_empty());
+        &mut self.stack
+    }
+
     pub(super) fn iter(&self) -> impl Iterator<Item = &Entry> {
         self.heap.iter().chain(self.stack.iter())
     }
@@ -61,15 +69,18 @@ impl Queue {
 /// A queued node pair, ordered by its rank, ties broken by node indices (deterministic).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Entry {
-    /// The pair's probability.
+    /// The pair's probability ([`UNESTIMATED`](super::traverse::UNESTIMATED) if not estimated).
     pub(super) p: f64,
     /// Its rank in the queue: the probability, or for [`Order::DepthFirst`] the probability
-    /// weighted by how squarely the boxes straddle each other's surface.
+    /// weighted by how squarely the boxes straddle each other's surface, for
+    /// [`Order::Straddle`] that straddle alone.
     pub(super) rank: f64,
     /// Node of the first tree.
     pub(super) a: u32,
     /// Node of the second tree.
     pub(super) b: u32,
+    /// Distance between the two boxes' centres (what an estimate needs).
+    pub(super) center_distance: f32,
 }
 
 impl PartialEq for Entry {
