@@ -19,10 +19,10 @@ pub struct AdbBuildOptions {
     /// Cells per axis of each node's grid (`resolution³` cells, clamped to 1..=8).
     ///
     /// 4 (64 cells, within the papers' one-byte count) is the default, by measurement (the
-    /// `accuracy_vs_time` report's `--resolution R`, README): with exact leaves 2 is a little
-    /// faster than 4, but its coarse counts separate node pairs so poorly that a query decided
-    /// by the estimates (estimated leaves, budgets) explores nearly everything; 6 is slower
-    /// than 4 either way and builds slower.
+    /// `accuracy_vs_time` report's `--resolution R`, README): the default query, which
+    /// estimates few pairs, is as fast at 2, 4 or 6, but at 2 the coarse counts separate node
+    /// pairs so poorly that a query decided by the estimates (estimated leaves) explores nearly
+    /// everything; 6 is slower than 4 there and builds slower.
     pub resolution: u32,
     /// Fraction of the papers' MaxArea at which a cell counts as well-filled (see
     /// [`CellGrid::with_fill_fraction`]).
