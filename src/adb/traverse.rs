@@ -49,10 +49,11 @@ pub(super) const UNESTIMATED: f64 = -1.0;
 
 /// Queue pops before an [`Order::Straddle`] traversal first estimates its queued pairs and
 /// checks their evidence; the next checks come after twice as many pops each time, so the
-/// checks estimate a bounded share of the pairs. Measured on the `accuracy_vs_time` poses
-/// (dragon_50k, small_intestine_100k, ogre, stanford-bunny, torus_32k): 16 leaves the
-/// default query at 0.9–1.2× the exact query's median, 64 and 256 at 0.64–0.84× (most
-/// queries end on a triangle hit or an emptied queue before 64 pops), at the same errors.
+/// checks estimate a bounded share of the pairs. Measured by changing this value and timing
+/// the default query on the `accuracy_vs_time` poses (dragon_50k, small_intestine_100k, ogre,
+/// stanford-bunny, torus_32k): with 16 it took 0.9–1.2× the exact query's median, with 64 or
+/// 256 0.64–0.84× (most queries end on a triangle hit or an emptied queue before 64 pops),
+/// at the same errors.
 pub const FIRST_EVIDENCE_CHECK: u32 = 64;
 
 /// Highest probability an *estimate* may report: only an exact triangle test is certain, so

@@ -65,8 +65,7 @@ pub struct CollisionConfig {
     /// [`Order::Straddle`], dives to a first intersecting triangle pair and, with exact leaves,
     /// estimates only the pairs its evidence checks and its confidence need: the fastest
     /// order on the `accuracy_vs_time` report's poses, at the same error. Without exact leaves
-    /// every pair is estimated whatever the order, and [`Order::DepthFirst`], which ranks by
-    /// the estimates too, may reach the leaves that matter sooner.
+    /// every pair is estimated whatever the order, and only the ranking differs.
     pub adb_order: Order,
     /// The confidence from which an ADB answer that its traversal did not settle (its slice
     /// ran out, or leaf pairs were left to their estimates) counts as a collision
