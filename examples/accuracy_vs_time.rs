@@ -48,6 +48,8 @@ use stochastic_collision::poses::near_contact_poses;
 
 #[path = "support/oracle_descent.rs"]
 mod oracle_descent;
+#[path = "support/progress.rs"]
+mod progress;
 use oracle_descent::{LeafDepths, oracle_descent_pairs};
 
 /// Offsets from first contact are drawn uniformly in ±SPREAD × size.
@@ -349,14 +351,7 @@ struct PoseRecord {
 }
 
 fn progress_bar(label: &str, done: usize, total: usize) {
-    let width = 30;
-    let filled = done * width / total.max(1);
-    eprint!(
-        "\r  {label:<28} [{}{}] {:>3}%",
-        "#".repeat(filled),
-        " ".repeat(width - filled),
-        done * 100 / total.max(1)
-    );
+    eprint!("\r  {label:<28} {}", progress::bar(done, total));
     if done >= total {
         eprintln!();
     }

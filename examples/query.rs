@@ -40,6 +40,8 @@
 //! loaded and built once.
 #[path = "support/cli.rs"]
 mod cli;
+#[path = "support/progress.rs"]
+mod progress;
 
 use std::ffi::OsString;
 use std::io::{IsTerminal, Write};
@@ -337,12 +339,10 @@ struct Progress {
 }
 
 impl Progress {
-    const WIDTH: usize = 30;
-
     fn start(label: String, with_bar: bool) -> Self {
         let bar = with_bar && std::io::stderr().is_terminal();
         if bar {
-            eprint!("\r  {label} [{}]   0%", " ".repeat(Self::WIDTH));
+            eprint!("\r  {label} {}", progress::bar(0, 1));
         } else {
             eprint!("  {label} ...");
         }
@@ -364,24 +364,13 @@ impl Progress {
             return;
         }
         *shown = done;
-        let filled = done * Self::WIDTH / total;
-        eprint!(
-            "\r  {} [{}{}] {:>3}%",
-            self.label,
-            "#".repeat(filled),
-            " ".repeat(Self::WIDTH - filled),
-            done * 100 / total
-        );
+        eprint!("\r  {} {}", self.label, progress::bar(done, total));
     }
 
     fn finish(self) {
         let seconds = self.start.elapsed().as_secs_f64();
         if self.bar {
-            eprintln!(
-                "\r  {} [{}] 100% {seconds:.2} s",
-                self.label,
-                "#".repeat(Self::WIDTH)
-            );
+            eprintln!("\r  {} {} {seconds:.2} s", self.label, progress::bar(1, 1));
         } else {
             eprintln!(" done in {seconds:.2} s");
         }

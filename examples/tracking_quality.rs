@@ -30,6 +30,9 @@
 //! `target/tracking_quality`). With `TRACKING_QUALITY_DEBUG=1`, each missed region is listed
 //! (first frame, frames alive, largest number of exact pairs).
 
+#[path = "support/progress.rs"]
+mod progress;
+
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -188,14 +191,7 @@ fn progress(label: &str, done: usize, total: usize) {
     if !done.is_multiple_of(step) && done < total {
         return;
     }
-    let width = 30;
-    let filled = done * width / total.max(1);
-    eprint!(
-        "\r  {label:<24} [{}{}] {:>3}%",
-        "#".repeat(filled),
-        " ".repeat(width - filled),
-        done * 100 / total.max(1)
-    );
+    eprint!("\r  {label:<24} {}", progress::bar(done, total));
     if done >= total {
         eprintln!();
     }
