@@ -14,12 +14,13 @@
 //! Modes:
 //! - `exact` (BVH + exact triangle tests). `--solid` also counts a mesh inside a closed other
 //!   mesh as colliding.
-//! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--collide-at 0.5] [--budget-us T |
-//!   --budget-nodes N] [--leaves exact|estimated] [--decision evidence|confidence]
-//!   [--order straddle|depth-first|evidence-first|best-first] [--estimator calibrated|paper|planarity]
-//!   [--resolution 4]`; `probability` is the ADB confidence, `nodes_visited` the node pairs
-//!   visited. `--leaves estimated` never tests a triangle (default: leaf pairs are tested
-//!   exactly); `--decision evidence` stops as soon as the evidence found reaches `p_min`
+//! - `adb` (ADB-tree, time-critical): `[--p-min 0.99] [--k-min 10] [--collide-at 0.5]
+//!   [--budget-us T | --budget-nodes N] [--leaves exact|estimated]
+//!   [--decision evidence|confidence] [--order straddle|depth-first|evidence-first|best-first]
+//!   [--estimator calibrated|paper|planarity] [--resolution 4]`; `probability` is the ADB
+//!   confidence, `nodes_visited` the node pairs visited. `--leaves estimated` never tests a
+//!   triangle (default: leaf pairs are tested exactly); `--decision evidence` stops as soon as
+//!   the evidence found reaches `p_min`
 //!   (`Decision::Evidence`; default `confidence`: waits for `k_min` pieces of evidence);
 //!   `--order best-first` expands the most probable pair of the whole queue next (the papers'
 //!   order), `evidence-first` the pairs that count as evidence best first, then the others depth
@@ -76,8 +77,8 @@ mesh A (at identity) and writes the CSV index,collides,probability,time_ns,nodes
                     collides too)
   --mode adb        ADB-tree: --p-min (0.99) and --k-min (10) set the decision, --collide-at
                     (0.5) the confidence from which an unsettled answer is a collision,
-                    --budget-us or --budget-nodes a budget per query, --leaves, --decision, --order and
-                    --estimator the traversal, --resolution (4) the cells per axis
+                    --budget-us or --budget-nodes a budget per query, --leaves, --decision,
+                    --order and --estimator the traversal, --resolution (4) the cells per axis
 Bad input exits with code 2 and one line on stderr.";
 
 /// Meshes from this many triangles show the progress of their build on stderr (smaller ones

@@ -185,7 +185,7 @@ struct Truth {
     first_seen: Vec<usize>,
 }
 
-fn progress(label: &str, done: usize, total: usize) {
+fn show_progress(label: &str, done: usize, total: usize) {
     // Redraw about every 2 %.
     let step = (total / 50).max(1);
     if !done.is_multiple_of(step) && done < total {
@@ -345,7 +345,7 @@ fn exact_truth(
             points,
             triangle_pairs: pairs.iter().map(|c| (c.pair.a, c.pair.b)).collect(),
         });
-        progress("exact self pass", f + 1, whirl.frames());
+        show_progress("exact self pass", f + 1, whirl.frames());
     }
     Truth { frames, first_seen }
 }
@@ -672,7 +672,7 @@ fn main() {
             ..config.clone()
         };
         results.push(run_tracker(&mesh, &whirl, &truth, cfg, tolerance));
-        progress("tracker sweep", i + 1, counts.len());
+        show_progress("tracker sweep", i + 1, counts.len());
     }
     let main_run = results
         .iter()
