@@ -18,15 +18,17 @@
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh, 600 poses each (the README's figures: `--full --poses 300`). Writes
-//! `results.csv`, `summary.csv`, `outcomes.csv`, `error_vs_time.svg`, `error_vs_distance.svg` and
-//! `reliability.svg` to `DIR` (default `target/accuracy_vs_time`), and prints a table of the
-//! headline configurations, a table of the variants (orders, decisions, the raw estimate without
-//! its fitted calibration) against the default, the reliability of the reported probabilities,
-//! the ADB targets per mesh (met or not), where the time
-//! of the exact and the default queries goes on colliding and non-colliding poses (median time,
-//! node pairs, time per node pair: `outcomes.csv`), and the oracle bound: what a traversal that
-//! went straight down to the nearest intersecting triangle pair would take
-//! (`support/oracle_descent.rs`; also in `outcomes.csv`).
+//! `results.csv`, `summary.csv`, `outcomes.csv`, `time_vs_distance.csv`, `error_vs_time.svg`,
+//! `error_vs_distance.svg`, `time_vs_distance.svg` and `reliability.svg` to `DIR` (default
+//! `target/accuracy_vs_time`), and prints a table of the headline configurations, a table of the
+//! variants (orders, decisions, the raw estimate without its fitted calibration) against the
+//! default, the reliability of the reported probabilities, the ADB targets per mesh (met or not),
+//! where the time of the exact and the default queries goes on colliding and non-colliding poses
+//! (median time, node pairs, time per node pair: `outcomes.csv`) and by distance from first
+//! contact (`time_vs_distance.*`), the oracle bound: what a traversal that went straight down to
+//! the nearest intersecting triangle pair would take (`support/oracle_descent.rs`; also in
+//! `outcomes.csv`), and how many poses each query answers within the targeted fraction of the
+//! exact median.
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -35,7 +37,6 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use plotters::coord::Shift;
-use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
     AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, Order, PlanarityEstimator,
@@ -57,6 +58,18 @@ const SPREAD: f32 = 0.15;
 /// "Near contact": within 5 % of the size of first contact.
 const NEAR: f32 = 0.05;
 const DISTANCE_BINS: usize = 10;
+/// Width of a distance bin (fraction of the size).
+const DISTANCE_BIN_WIDTH: f32 = 2.0 * SPREAD / DISTANCE_BINS as f32;
+
+/// The distance bin of an offset from first contact.
+fn distance_bin(offset: f32) -> usize {
+    (((offset + SPREAD) / DISTANCE_BIN_WIDTH) as usize).min(DISTANCE_BINS - 1)
+}
+
+/// The centre offset of distance bin `i`.
+fn distance_bin_center(i: usize) -> f64 {
+    f64::from(-SPREAD + DISTANCE_BIN_WIDTH * (i as f32 + 0.5))
+}
 /// Passes over all poses per method; a query's time is its median over the passes.
 const TIMING_PASSES: usize = 3;
 
@@ -678,6 +691,7 @@ fn write_outputs(
 
     plot_error_vs_time(settings, configs, order, all)?;
     plot_error_vs_distance(settings, configs, order, all)?;
+    plot_time_vs_distance(settings, configs, order, all)?;
     plot_reliability(settings, configs, order, all)?;
     Ok(())
 }
@@ -773,12 +787,11 @@ fn oracle_bound(records: &[PoseRecord], default: usize) -> Option<OracleBound> {
     if pairs.is_empty() || !ns_per_pair.is_finite() {
         return None;
     }
-    let oracle_us = |r: &PoseRecord| match r.oracle_pairs {
-        Some(n) => n as f64 * ns_per_pair / 1e3,
-        None => r.exact.time_ns.min(r.adb[default].time_ns) / 1e3,
-    };
     let mut colliding_us: Vec<f64> = pairs.iter().map(|n| n * ns_per_pair / 1e3).collect();
-    let mut all_us: Vec<f64> = records.iter().map(oracle_us).collect();
+    let mut all_us: Vec<f64> = records
+        .iter()
+        .map(|r| oracle_pose_us(r, ns_per_pair, default))
+        .collect();
     Some(OracleBound {
         colliding: pairs.len(),
         median_pairs: median(&mut pairs),
@@ -786,6 +799,16 @@ fn oracle_bound(records: &[PoseRecord], default: usize) -> Option<OracleBound> {
         colliding_median_us: median(&mut colliding_us),
         median_us: median(&mut all_us),
     })
+}
+
+/// One pose's time under the oracle bound (µs): a colliding pose's oracle node pairs at
+/// `ns_per_pair`, a non-colliding pose the faster of the exact and the default (`default`)
+/// queries' measured times.
+fn oracle_pose_us(r: &PoseRecord, ns_per_pair: f64, default: usize) -> f64 {
+    match r.oracle_pairs {
+        Some(n) => n as f64 * ns_per_pair / 1e3,
+        None => r.exact.time_ns.min(r.adb[default].time_ns) / 1e3,
+    }
 }
 
 /// The ADB targets for the default configuration and the 20 µs budget, per mesh, where the
@@ -909,7 +932,32 @@ fn write_targets(
     }
     csv.flush()?;
     println!(
-        "wrote results.csv, summary.csv, outcomes.csv, error_vs_time.svg, error_vs_distance.svg, reliability.svg to {}",
+        "poses answered within {TARGET_RATIO}× of the exact median (a median of {TARGET_RATIO}× \
+         needs half of them; the oracle as in its bound):"
+    );
+    for name in order {
+        let records = &all[name];
+        let limit_us = TARGET_RATIO * stats(records, |r| r.exact).median_us;
+        let within = |time_us: &dyn Fn(&PoseRecord) -> f64| {
+            records.iter().filter(|r| time_us(r) <= limit_us).count()
+        };
+        let oracle = bounds.get(name).map_or(String::new(), |o| {
+            format!(
+                ", oracle {}",
+                within(&|r| oracle_pose_us(r, o.ns_per_pair, default))
+            )
+        });
+        println!(
+            "  {name}: within {limit_us:.2} µs: exact {}, default {}{oracle} of {} (half: {})",
+            within(&|r| r.exact.time_ns / 1e3),
+            within(&|r| r.adb[default].time_ns / 1e3),
+            records.len(),
+            records.len().div_ceil(2)
+        );
+    }
+    println!(
+        "wrote results.csv, summary.csv, outcomes.csv, time_vs_distance.csv, error_vs_time.svg, \
+         error_vs_distance.svg, time_vs_distance.svg, reliability.svg to {}",
         settings.out.display()
     );
     Ok(())
@@ -1015,14 +1063,7 @@ fn plot_error_vs_distance(
     all: &BTreeMap<String, Vec<PoseRecord>>,
 ) -> Result<(), Box<dyn std::error::Error>> {
     let path = settings.out.join("error_vs_distance.svg");
-    let root = SVGBackend::new(&path, (1200, 560)).into_drawing_area();
-    root.fill(&WHITE)?;
-    let root = root.titled(
-        "ADB error vs distance from first contact",
-        ("sans-serif", 20),
-    )?;
-    let panels = root.split_evenly((1, 2));
-    let width = 2.0 * SPREAD / DISTANCE_BINS as f32;
+    let panels = two_panels(&path, "ADB error vs distance from first contact")?;
     // Both panels share the error axis, so the two configurations compare at a glance.
     let mut panel_curves = Vec::new();
     let mut emax = 5.0f64;
@@ -1035,7 +1076,7 @@ fn plot_error_vs_distance(
         for name in order {
             let mut bins = [(0usize, 0usize); DISTANCE_BINS];
             for r in &all[name] {
-                let b = (((r.offset + SPREAD) / width) as usize).min(DISTANCE_BINS - 1);
+                let b = distance_bin(r.offset);
                 bins[b].0 += 1;
                 bins[b].1 += usize::from(r.adb[k].collides != r.exact.collides);
             }
@@ -1043,12 +1084,7 @@ fn plot_error_vs_distance(
                 .iter()
                 .enumerate()
                 .filter(|(_, b)| b.0 > 0)
-                .map(|(i, b)| {
-                    (
-                        f64::from(-SPREAD + width * (i as f32 + 0.5)),
-                        100.0 * b.1 as f64 / b.0 as f64,
-                    )
-                })
+                .map(|(i, b)| (distance_bin_center(i), 100.0 * b.1 as f64 / b.0 as f64))
                 .collect();
             emax = emax.max(pts.iter().map(|p| p.1).fold(0.0, f64::max));
             curves.push((name.clone(), pts));
@@ -1064,18 +1100,99 @@ fn plot_error_vs_distance(
             .build_cartesian_2d(f64::from(-SPREAD)..f64::from(SPREAD), 0.0f64..emax * 1.1)?;
         chart
             .configure_mesh()
-            .x_desc("offset from first contact (fraction of size; < 0 overlapping)")
+            .x_desc(OFFSET_AXIS)
             .y_desc("error (%)")
-            // The middle tick lands a rounding error off 0: no "-0.00".
-            .x_label_formatter(&|v| format!("{:.2}", if v.abs() < 1e-6 { 0.0 } else { *v }))
+            .x_label_formatter(&offset_tick)
             .light_line_style(TRANSPARENT)
             .draw()?;
-        for (i, (name, pts)) in curves.into_iter().enumerate() {
-            draw_curve(&mut chart, &pts, name, palette(i), 3)?;
-        }
-        legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+        draw_mesh_curves(&mut chart, curves, SeriesLabelPosition::UpperLeft)?;
     }
-    root.present()?;
+    panels[0].present()?;
+    Ok(())
+}
+
+/// Median query time against the offset from first contact, for the exact query (left) and
+/// the default configuration (right), one curve per mesh on a shared log axis; the same medians,
+/// with the median node pairs, in `time_vs_distance.csv`.
+fn plot_time_vs_distance(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let default = configs
+        .iter()
+        .position(|c| c.label == DEFAULT_LABEL)
+        .expect("config");
+    let mut csv = create_csv(
+        settings,
+        "time_vs_distance.csv",
+        "mesh,method,offset_from,offset_to,poses,median_us,median_node_pairs",
+    )?;
+    let mut panel_curves = Vec::new();
+    let (mut tmin, mut tmax) = (f64::INFINITY, 1.0f64);
+    for (method, pick) in [("exact", None), (DEFAULT_LABEL, Some(default))] {
+        let mut curves = Vec::new();
+        for name in order {
+            let mut bins: Vec<(Vec<f64>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); DISTANCE_BINS];
+            for r in &all[name] {
+                let a = pick.map_or(r.exact, |k| r.adb[k]);
+                let bin = &mut bins[distance_bin(r.offset)];
+                bin.0.push(a.time_ns / 1e3);
+                bin.1.push(a.nodes as f64);
+            }
+            let mut pts = Vec::new();
+            for (i, (times, pairs)) in bins.iter_mut().enumerate() {
+                if times.is_empty() {
+                    continue;
+                }
+                let (t, n) = (median(times), median(pairs));
+                let from = -SPREAD + DISTANCE_BIN_WIDTH * i as f32;
+                writeln!(
+                    csv,
+                    "{name},{method},{from:.3},{:.3},{},{t:.3},{n}",
+                    from + DISTANCE_BIN_WIDTH,
+                    times.len()
+                )?;
+                tmin = tmin.min(t);
+                tmax = tmax.max(t);
+                pts.push((distance_bin_center(i), t));
+            }
+            curves.push((name.clone(), pts));
+        }
+        panel_curves.push((method, curves));
+    }
+    csv.flush()?;
+    let tmin = if tmin.is_finite() { tmin * 0.8 } else { 0.1 };
+    let path = settings.out.join("time_vs_distance.svg");
+    let panels = two_panels(&path, "Median query time vs distance from first contact")?;
+    // Both panels share the time axis, so the two queries compare at a glance.
+    for (area, (method, curves)) in panels.iter().zip(panel_curves) {
+        let caption = if method == "exact" {
+            "exact query".to_string()
+        } else {
+            format!("default ADB query ({method})")
+        };
+        let mut chart = ChartBuilder::on(area)
+            .caption(caption, ("sans-serif", 16))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(50)
+            .build_cartesian_2d(
+                f64::from(-SPREAD)..f64::from(SPREAD),
+                (tmin..tmax * 1.3).log_scale(),
+            )?;
+        chart
+            .configure_mesh()
+            .x_desc(OFFSET_AXIS)
+            .y_desc("median query time (µs, log)")
+            .x_label_formatter(&offset_tick)
+            .y_label_formatter(&|v| tick_label(*v))
+            .light_line_style(TRANSPARENT)
+            .draw()?;
+        draw_mesh_curves(&mut chart, curves, SeriesLabelPosition::UpperRight)?;
+    }
+    panels[0].present()?;
     Ok(())
 }
 
@@ -1183,9 +1300,45 @@ fn plot_reliability(
     finish(&mut chart, &root, SeriesLabelPosition::UpperLeft)
 }
 
+/// A figure of two panels side by side under `title`, written to `path` once presented (any
+/// panel presents the whole figure).
+fn two_panels<'a>(
+    path: &'a std::path::Path,
+    title: &str,
+) -> Result<Vec<DrawingArea<SVGBackend<'a>, Shift>>, Box<dyn std::error::Error>> {
+    let root = SVGBackend::new(path, (1200, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let root = root.titled(title, ("sans-serif", 20))?;
+    Ok(root.split_evenly((1, 2)))
+}
+
+/// The x axis of the plots against distance from first contact.
+const OFFSET_AXIS: &str = "offset from first contact (fraction of size; < 0 overlapping)";
+
+/// A tick of [`OFFSET_AXIS`]: the middle tick lands a rounding error off 0, so no "-0.00".
+fn offset_tick(v: &f64) -> String {
+    format!("{:.2}", if v.abs() < 1e-6 { 0.0 } else { *v })
+}
+
+/// One curve per mesh (in palette order), then the legend at `position`.
+fn draw_mesh_curves<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+    curves: Vec<(String, Vec<(f64, f64)>)>,
+    position: SeriesLabelPosition,
+) -> Result<(), Box<dyn std::error::Error>>
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    for (i, (name, pts)) in curves.into_iter().enumerate() {
+        draw_curve(chart, &pts, name, palette(i), 3)?;
+    }
+    legend(chart, position)
+}
+
 /// One labelled curve with its points marked.
-fn draw_curve<'a, X>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+fn draw_curve<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     pts: &[(f64, f64)],
     label: String,
     color: RGBColor,
@@ -1193,6 +1346,7 @@ fn draw_curve<'a, X>(
 ) -> Result<(), Box<dyn std::error::Error>>
 where
     X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
 {
     chart
         .draw_series(LineSeries::new(pts.to_vec(), color.stroke_width(2)))?
@@ -1203,13 +1357,14 @@ where
 }
 
 /// The legend box (where the curves leave room), then the file.
-fn finish<'a, X>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+fn finish<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     root: &DrawingArea<SVGBackend<'a>, Shift>,
     position: SeriesLabelPosition,
 ) -> Result<(), Box<dyn std::error::Error>>
 where
     X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
 {
     legend(chart, position)?;
     root.present()?;
@@ -1217,12 +1372,13 @@ where
 }
 
 /// The legend box of a chart, at `position`.
-fn legend<'a, X>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+fn legend<'a, X, Y>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
     position: SeriesLabelPosition,
 ) -> Result<(), Box<dyn std::error::Error>>
 where
     X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
 {
     chart
         .configure_series_labels()
