@@ -19,7 +19,8 @@
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh, 600 poses each (the README's figures: `--full --poses 300`). Writes
 //! `results.csv`, `summary.csv`, `outcomes.csv`, `time_vs_distance.csv`, `error_vs_time.svg`,
-//! `error_vs_distance.svg`, `time_vs_distance.svg` and `reliability.svg` to `DIR` (default
+//! `error_vs_median.svg`, `error_vs_distance.svg`, `time_vs_distance.svg` and `reliability.svg`
+//! to `DIR` (default
 //! `target/accuracy_vs_time`), and prints a table of the headline configurations, a table of the
 //! variants (orders, decisions, the raw estimate without its fitted calibration) against the
 //! default, the reliability of the reported probabilities, the ADB targets per mesh (met or not),
@@ -27,8 +28,8 @@
 //! (median time, node pairs, time per node pair: `outcomes.csv`) and by distance from first
 //! contact (`time_vs_distance.*`), the oracle bound: what a traversal that went straight down to
 //! the nearest intersecting triangle pair would take (`support/oracle_descent.rs`; also in
-//! `outcomes.csv`), and how many poses each query answers within the targeted fraction of the
-//! exact median.
+//! `outcomes.csv`), how many poses each query answers within the targeted fraction of the
+//! exact median, and what reaching that fraction with a node budget costs in error.
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -200,7 +201,9 @@ fn configs() -> Vec<Config> {
             query: tuned(0.99, 10, 0.0, Budget::Time(Duration::from_micros(us))),
         });
     }
-    for n in [100u64, 300, 1000] {
+    // Down to a handful of node pairs: where the median reaches the 0.25× target, and what the
+    // answers are worth there.
+    for n in NODE_BUDGETS {
         out.push(Config {
             label: format!("calibrated p0.99 k10 {n}nodes"),
             family: "node budget",
@@ -281,6 +284,9 @@ fn configs() -> Vec<Config> {
     }
     out
 }
+
+/// The node budgets of the sweep (node pairs), ascending.
+const NODE_BUDGETS: [u64; 8] = [10, 20, 30, 40, 60, 100, 300, 1000];
 
 /// The default configuration, whose error the targets are about.
 const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
@@ -690,6 +696,7 @@ fn write_outputs(
     println!("{}", variants_table(configs, order, all)?);
 
     plot_error_vs_time(settings, configs, order, all)?;
+    plot_error_vs_median(settings, configs, order, all)?;
     plot_error_vs_distance(settings, configs, order, all)?;
     plot_time_vs_distance(settings, configs, order, all)?;
     plot_reliability(settings, configs, order, all)?;
@@ -959,11 +966,141 @@ fn write_targets(
             records.len().div_ceil(2)
         );
     }
+    print_price_of_target_ratio(configs, order, all, triangles, &exact_medians);
     println!(
         "wrote results.csv, summary.csv, outcomes.csv, time_vs_distance.csv, error_vs_time.svg, \
-         error_vs_distance.svg, time_vs_distance.svg, reliability.svg to {}",
+         error_vs_median.svg, error_vs_distance.svg, time_vs_distance.svg, reliability.svg to {}",
         settings.out.display()
     );
+    Ok(())
+}
+
+/// What answering at the target's median costs: on each mesh the target is about, the largest
+/// node budget of the sweep whose median is within [`TARGET_RATIO`]× the exact median, and its
+/// error (a budget-cut answer is the traversal's best estimate).
+fn print_price_of_target_ratio(
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+    triangles: &BTreeMap<String, usize>,
+    exact_medians: &BTreeMap<&String, f64>,
+) {
+    let budgets: Vec<(usize, &Config)> = configs
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.family == "node budget")
+        .collect();
+    if budgets.is_empty() {
+        return;
+    }
+    println!(
+        "the price of a median within {TARGET_RATIO}× exact (the largest node budget that reaches \
+         it; answers cut by the budget are the best estimate so far):"
+    );
+    for name in order
+        .iter()
+        .filter(|n| triangles[*n] >= TARGET_RATIO_TRIANGLES)
+    {
+        let records = &all[name];
+        let exact_median = exact_medians[name];
+        // Ascending budgets: the last that reaches the ratio is the most accurate that does.
+        let reaching = budgets
+            .iter()
+            .rev()
+            .map(|&(k, c)| (c, stats(records, |r| r.adb[k])))
+            .find(|(_, s)| s.median_us <= TARGET_RATIO * exact_median);
+        match reaching {
+            Some((c, s)) => println!(
+                "  {name}: {} node pairs: median {:.2}× exact, error {:.1} % (false positives \
+                 {:.1} %, false negatives {:.1} %), near contact {:.1} %",
+                match c.query.budget {
+                    Budget::NodePairs(n) => n.to_string(),
+                    _ => c.label.clone(),
+                },
+                s.median_us / exact_median,
+                s.error,
+                s.false_pos,
+                s.false_neg,
+                s.near_error
+            ),
+            None => println!("  {name}: no node budget of the sweep reaches it"),
+        }
+    }
+}
+
+/// Error against median time, one curve per mesh: the node budgets ascending, then no budget;
+/// the time as a fraction of the mesh's exact median, with the target's ratio and error marked.
+fn plot_error_vs_median(
+    settings: &Settings,
+    configs: &[Config],
+    order: &[String],
+    all: &BTreeMap<String, Vec<PoseRecord>>,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let path = settings.out.join("error_vs_median.svg");
+    let root = SVGBackend::new(&path, (900, 560)).into_drawing_area();
+    root.fill(&WHITE)?;
+    let swept: Vec<usize> = configs
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.family == "node budget")
+        .chain(
+            configs
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.label == DEFAULT_LABEL),
+        )
+        .map(|(k, _)| k)
+        .collect();
+    let (mut rmax, mut emax) = (1.0f64, 5.0f64);
+    let mut curves = Vec::new();
+    for name in order {
+        let records = &all[name];
+        let exact_median = stats(records, |r| r.exact).median_us;
+        let pts: Vec<(f64, f64)> = swept
+            .iter()
+            .map(|&k| {
+                let s = stats(records, |r| r.adb[k]);
+                (s.median_us / exact_median, s.error)
+            })
+            .filter(|(ratio, _)| ratio.is_finite() && *ratio > 0.0)
+            .collect();
+        for &(r, e) in &pts {
+            rmax = rmax.max(r);
+            emax = emax.max(e);
+        }
+        curves.push((name.clone(), pts));
+    }
+    let mut chart = ChartBuilder::on(&root)
+        .caption(
+            "Calibrated ADB: error vs median time, node budgets 10-1000 then none",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(50)
+        .build_cartesian_2d(0.0f64..rmax * 1.1, 0.0f64..emax * 1.1)?;
+    chart
+        .configure_mesh()
+        .x_desc("median query time (× the exact query's; dashed: the 0.25× target)")
+        .y_desc("error (%; dashed: the 2 % target)")
+        .x_label_formatter(&|v| format!("{v:.2}"))
+        .light_line_style(TRANSPARENT)
+        .draw()?;
+    let dashed = BLACK.mix(0.5).stroke_width(1);
+    chart.draw_series(DashedLineSeries::new(
+        [(TARGET_RATIO, 0.0), (TARGET_RATIO, emax * 1.1)],
+        6,
+        4,
+        dashed,
+    ))?;
+    chart.draw_series(DashedLineSeries::new(
+        [(0.0, TARGET_ERROR), (rmax * 1.1, TARGET_ERROR)],
+        6,
+        4,
+        dashed,
+    ))?;
+    draw_mesh_curves(&mut chart, curves, SeriesLabelPosition::UpperRight)?;
+    root.present()?;
     Ok(())
 }
 
