@@ -32,9 +32,10 @@ pub enum Budget {
 /// confidence ([`AdbOutcome::probability`]). Disjoint pairs of the same surfaces are correlated
 /// (neighbouring patches of one crossing), so counting each as fully independent would
 /// overstate the evidence. With 2, the `accuracy_vs_time` report's default and evidence rows
-/// err on at most 0.75 % of the poses of any mesh (the README) while still stopping early, and
-/// the confidence of budgeted answers is calibrated (the report's reliability lines); with 1
-/// (each pair independent) it was overstated, and the error under budgets higher.
+/// make no error on any mesh, and with estimated leaves err on at most 2.1 % of the poses of
+/// any mesh (the README) while still stopping early, and the confidence of budgeted answers
+/// is calibrated (the report's reliability lines); with 1 (each pair independent) it was
+/// overstated, and the error under budgets higher.
 pub const EVIDENCE_REDUNDANCY: f64 = 2.0;
 
 /// Queue pops between two clock reads of a [`Budget::Time`] query.
@@ -49,11 +50,11 @@ pub(super) const UNESTIMATED: f64 = -1.0;
 
 /// Queue pops before an [`Order::Straddle`] traversal first estimates its queued pairs and
 /// checks their evidence; the next checks come after twice as many pops each time, so the
-/// checks estimate a bounded share of the pairs. Measured by changing this value and timing
-/// the default query on the `accuracy_vs_time` poses (dragon_50k, small_intestine_100k, ogre,
-/// stanford-bunny, torus_32k): with 16 it took 0.9–1.2× the exact query's median, with 64 or
-/// 256 0.64–0.84× (most queries end on a triangle hit or an emptied queue before 64 pops),
-/// at the same errors.
+/// checks estimate a bounded share of the pairs. Measured when the order was introduced, by
+/// changing this value and timing the default query on the `accuracy_vs_time` poses
+/// (dragon_50k, small_intestine_100k, ogre, stanford-bunny, torus_32k): with 16 it took
+/// 0.9–1.2× the exact query's median, with 64 or 256 0.64–0.84× (most queries end on a
+/// triangle hit or an emptied queue before 64 pops), at the same errors.
 pub const FIRST_EVIDENCE_CHECK: u32 = 64;
 
 /// Highest probability an *estimate* may report: only an exact triangle test is certain, so
@@ -185,9 +186,10 @@ pub enum Decision {
     /// evidence. `k_min` only sets the bar a pair must reach to count, so a larger `k_min`
     /// lets weaker pairs count (to never stop on evidence, use `Confidence` with a `k_min` no
     /// traversal can reach). On the `accuracy_vs_time` report's poses, at the same error: with
-    /// estimated leaves up to 1.8× faster than `Confidence`; with exact leaves as fast or up to
-    /// 15 % slower (in the plugin's pile scene within the noise), while an answer given on
-    /// evidence has a contact region, not the triangle pair of an exact leaf hit.
+    /// estimated leaves up to 1.7× faster than `Confidence` (1.8× on one mesh, where it errs a
+    /// little more); with exact leaves as fast or up to 15 % slower (in the plugin's pile
+    /// scene within the noise), while an answer given on evidence has a contact region, not
+    /// the triangle pair of an exact leaf hit.
     Evidence,
 }
 
