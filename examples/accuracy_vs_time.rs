@@ -19,16 +19,15 @@
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh, 600 poses each (the README's figures: `--full --poses 300`). Writes
 //! `results.csv`, `summary.csv`, `outcomes.csv`, `time_vs_distance.csv`, `error_vs_time.svg`,
-//! `error_vs_median.svg`, `error_vs_distance.svg`, `time_vs_distance.svg` and `reliability.svg`
-//! to `DIR` (default
-//! `target/accuracy_vs_time`), and prints a table of the headline configurations, a table of the
-//! variants (orders, decisions, the raw estimate without its fitted calibration) against the
-//! default, the reliability of the reported probabilities, the ADB targets per mesh (met or not),
-//! where the time of the exact and the default queries goes on colliding and non-colliding poses
-//! (median time, node pairs, time per node pair: `outcomes.csv`) and by distance from first
-//! contact (`time_vs_distance.*`), the oracle bound: what a traversal that went straight down to
-//! the nearest intersecting triangle pair would take (`support/oracle_descent.rs`; also in
-//! `outcomes.csv`), how many poses each query answers within the targeted fraction of the
+//! `error_vs_median.svg`, `error_vs_distance.svg`, `time_vs_distance.svg` and `reliability.svg` to
+//! `DIR` (default `target/accuracy_vs_time`), and prints a table of the headline configurations, a
+//! table of the variants (orders, decisions, the raw estimate without its fitted calibration)
+//! against the default, the reliability of the reported probabilities, the ADB targets per mesh
+//! (met or not), where the time of the exact and the default queries goes on colliding and
+//! non-colliding poses (median time, node pairs, time per node pair: `outcomes.csv`) and by
+//! distance from first contact (`time_vs_distance.*`), the oracle bound: what a traversal that went
+//! straight down to the nearest intersecting triangle pair would take (`support/oracle_descent.rs`;
+//! also in `outcomes.csv`), how many poses each query answers within the targeted fraction of the
 //! exact median, and what reaching that fraction with a node budget costs in error.
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -1072,7 +1071,11 @@ fn plot_error_vs_median(
     }
     let mut chart = ChartBuilder::on(&root)
         .caption(
-            "Calibrated ADB: error vs median time, node budgets 10-1000 then none",
+            format!(
+                "Calibrated ADB: error vs median time, node budgets {}-{} then none",
+                NODE_BUDGETS[0],
+                NODE_BUDGETS[NODE_BUDGETS.len() - 1]
+            ),
             ("sans-serif", 20),
         )
         .margin(12)
