@@ -984,10 +984,14 @@ fn print_price_of_target_ratio(
     triangles: &BTreeMap<String, usize>,
     exact_medians: &BTreeMap<&String, f64>,
 ) {
-    let budgets: Vec<(usize, &Config)> = configs
+    // (configuration index, node pairs) of the node-budget sweep, ascending.
+    let budgets: Vec<(usize, u64)> = configs
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.family == "node budget")
+        .filter_map(|(k, c)| match c.query.budget {
+            Budget::NodePairs(n) if c.family == "node budget" => Some((k, n)),
+            _ => None,
+        })
         .collect();
     if budgets.is_empty() {
         return;
@@ -1006,16 +1010,13 @@ fn print_price_of_target_ratio(
         let reaching = budgets
             .iter()
             .rev()
-            .map(|&(k, c)| (c, stats(records, |r| r.adb[k])))
+            .map(|&(k, n)| (n, stats(records, |r| r.adb[k])))
             .find(|(_, s)| s.median_us <= TARGET_RATIO * exact_median);
         match reaching {
-            Some((c, s)) => println!(
+            Some((n, s)) => println!(
                 "  {name}: {} node pairs: median {:.2}× exact, error {:.1} % (false positives \
                  {:.1} %, false negatives {:.1} %), near contact {:.1} %",
-                match c.query.budget {
-                    Budget::NodePairs(n) => n.to_string(),
-                    _ => c.label.clone(),
-                },
+                n,
                 s.median_us / exact_median,
                 s.error,
                 s.false_pos,
