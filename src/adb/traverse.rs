@@ -414,11 +414,17 @@ pub fn adb_intersects(
     // The most probable pair, probabilities compared in steps of 1/20 and ties going to the
     // deeper pair (whose boxes localise the contact better).
     let mut best: Option<((u32, u32), u32, u32)> = None;
-    let witness_key = |p: f64, ia: u32, ib: u32| {
-        let depth =
-            u32::from(a.nodes()[ia as usize].depth) + u32::from(b.nodes()[ib as usize].depth);
-        ((p * 20.0) as u32, depth)
-    };
+    // Records a pair's estimate `p` in the highest probability seen and the most probable pair.
+    let note_estimate =
+        |p: f64, ia: u32, ib: u32, max_p: &mut f64, best: &mut Option<((u32, u32), u32, u32)>| {
+            *max_p = max_p.max(p);
+            let depth =
+                u32::from(a.nodes()[ia as usize].depth) + u32::from(b.nodes()[ib as usize].depth);
+            let key = ((p * 20.0) as u32, depth);
+            if p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
+                *best = Some((key, ia, ib));
+            }
+        };
     let mut pops = 0u32;
     // Work since the last clock read, in pops (a leaf pair's triangle tests count too).
     let mut unclocked = 0u32;
@@ -439,11 +445,7 @@ pub fn adb_intersects(
         for e in queue.stack_mut() {
             if e.p == UNESTIMATED {
                 e.p = estimate(&node_pair(e.a, e.b, e.center_distance));
-                out.max_pair_probability = out.max_pair_probability.max(e.p);
-                let key = witness_key(e.p, e.a, e.b);
-                if e.p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
-                    *best = Some((key, e.a, e.b));
-                }
+                note_estimate(e.p, e.a, e.b, &mut out.max_pair_probability, best);
             }
             if e.p >= pair_threshold && (e.a, e.b) != (0, 0) {
                 found += 1;
@@ -565,13 +567,7 @@ pub fn adb_intersects(
                     continue;
                 }
                 let p = estimate(&node_pair(ia, ib, overlap.center_distance));
-                if p > out.max_pair_probability {
-                    out.max_pair_probability = p;
-                }
-                let key = witness_key(p, ia, ib);
-                if p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
-                    best = Some((key, ia, ib));
-                }
+                note_estimate(p, ia, ib, &mut out.max_pair_probability, &mut best);
                 if p >= pair_threshold {
                     out.pairs_found += 1;
                     if count_evidence {
