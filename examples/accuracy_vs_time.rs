@@ -14,6 +14,7 @@
 //!
 //! ```text
 //! cargo run --release --example accuracy_vs_time -- [--full] [--poses N] [--out DIR] [--meshes a,b,...]
+//!     [--resolution R] [--fill F] [--interior-resolution R] [--interior-samples N]
 //! ```
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
@@ -39,8 +40,8 @@ use std::time::{Duration, Instant};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, Order, PlanarityEstimator,
-    adb_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, MAX_SURFACE_SAMPLES, Order,
+    PlanarityEstimator, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects, root_boxes_overlap};
 use stochastic_collision::geometry::Pose;
@@ -124,9 +125,26 @@ fn parse_args() -> Result<Settings, String> {
                     .filter(|f: &f32| *f > 0.0 && *f <= 1.0)
                     .ok_or("--fill needs a number in (0, 1]")?
             }
+            "--interior-resolution" => {
+                s.build.interior_resolution = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|r| (1..=1024).contains(r))
+                    .ok_or("--interior-resolution needs a number in 1..=1024")?
+            }
+            "--interior-samples" => {
+                s.build.interior_samples = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|n| (1..=MAX_SURFACE_SAMPLES).contains(n))
+                    .ok_or(format!(
+                        "--interior-samples needs a number in 1..={MAX_SURFACE_SAMPLES}"
+                    ))?
+            }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --full, --poses N, --out DIR, --meshes a,b, --resolution R, --fill F)"
+                    "unknown argument `{other}` (known: --full, --poses N, --out DIR, --meshes a,b, \
+                     --resolution R, --fill F, --interior-resolution R, --interior-samples N)"
                 ));
             }
         }
@@ -252,6 +270,24 @@ fn configs() -> Vec<Config> {
             },
         });
     }
+    // The interpenetration certificate undone: what it is worth, unbudgeted and under a
+    // budget.
+    for (label, budget) in [
+        (NO_INTERIOR_LABEL, Budget::Unlimited),
+        (
+            "calibrated p0.99 k10 no-interior 20us",
+            Budget::Time(Duration::from_micros(20)),
+        ),
+    ] {
+        out.push(Config {
+            label: label.into(),
+            family: "estimator",
+            query: AdbQuery {
+                interior_after: None,
+                ..tuned(0.99, 10, 0.0, budget)
+            },
+        });
+    }
     out.push(Config {
         label: "calibrated p0.99 k10 evidence".into(),
         family: "estimator",
@@ -286,6 +322,11 @@ fn configs() -> Vec<Config> {
 
 /// The node budgets of the sweep (node pairs), ascending.
 const NODE_BUDGETS: [u64; 8] = [10, 20, 30, 40, 60, 100, 300, 1000];
+
+/// The exact query preceded by the interpenetration certificate (not an ADB configuration).
+const CERTIFIED_EXACT_LABEL: &str = "certificate + exact";
+/// The default without the interpenetration certificate.
+const NO_INTERIOR_LABEL: &str = "calibrated p0.99 k10 no-interior";
 
 /// The default configuration, whose error the targets are about.
 const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
@@ -363,6 +404,9 @@ struct Answer {
 struct PoseRecord {
     offset: f32,
     exact: Answer,
+    /// The exact query preceded by the interpenetration certificate (exact or not as the
+    /// mesh's interior map is): what the certificate alone is worth to an exact query.
+    certified_exact: Answer,
     adb: Vec<Answer>,
     /// Node pairs of the oracle descent ([`oracle_descent_pairs`]); `None` if not colliding.
     oracle_pairs: Option<u64>,
@@ -411,8 +455,10 @@ fn run_mesh(
         .collect();
     let mut exact_ws = QueryWorkspace::new();
     let mut adb_ws = AdbWorkspace::new();
-    // runs[method][pose]: one answer per timing pass; method 0 is the exact query.
-    let methods = configs.len() + 1;
+    // runs[method][pose]: one answer per timing pass; method 0 is the exact query, the last
+    // one the exact query preceded by the interpenetration certificate.
+    let methods = configs.len() + 2;
+    let interior = tree.interior();
     let mut runs = vec![vec![Vec::with_capacity(TIMING_PASSES); approach.len()]; methods];
     let steps = TIMING_PASSES * methods;
     for pass in 0..TIMING_PASSES {
@@ -421,13 +467,23 @@ fn run_mesh(
         for (m, method_runs) in runs.iter_mut().enumerate() {
             for (p, pose_runs) in approach.iter().zip(method_runs.iter_mut()) {
                 let t = Instant::now();
-                let answer = if m == 0 {
-                    let hit = intersects(cm, &Pose::IDENTITY, cm, &p.pose, &mut exact_ws);
+                let answer = if m == 0 || m == methods - 1 {
+                    let certified = m > 0
+                        && interior.is_some_and(|map| {
+                            map.certify(map, &p.pose).is_some()
+                                || map.certify(map, &p.pose.inverse()).is_some()
+                        });
+                    let hit =
+                        certified || intersects(cm, &Pose::IDENTITY, cm, &p.pose, &mut exact_ws);
                     Answer {
                         collides: hit,
                         probability: if hit { 1.0 } else { 0.0 },
                         time_ns: t.elapsed().as_nanos() as f64,
-                        nodes: exact_ws.node_pairs_visited(),
+                        nodes: if certified {
+                            0
+                        } else {
+                            exact_ws.node_pairs_visited()
+                        },
                     }
                 } else {
                     let o = adb_intersects(
@@ -463,7 +519,10 @@ fn run_mesh(
         .map(|(i, p)| PoseRecord {
             offset: p.offset / p.size,
             exact: median_run(&mut runs[0][i]),
-            adb: (1..methods).map(|m| median_run(&mut runs[m][i])).collect(),
+            certified_exact: median_run(&mut runs[methods - 1][i]),
+            adb: (1..methods - 1)
+                .map(|m| median_run(&mut runs[m][i]))
+                .collect(),
             oracle_pairs: oracle_descent_pairs(
                 (cm, &depths),
                 (cm, &depths),
@@ -570,6 +629,41 @@ fn main() {
     }
 }
 
+/// The columns of a configuration's statistics, in the order of `summary.csv` and the table
+/// (median and p99 µs, ratio of the median to the exact one, error, false positives, false
+/// negatives and error near contact in %, Brier score), each with its number of decimals,
+/// joined by `separator`.
+fn stat_columns(s: &Stats, exact_median: f64, digits: [usize; 8], separator: &str) -> String {
+    let values = [
+        s.median_us,
+        s.p99_us,
+        s.median_us / exact_median,
+        s.error,
+        s.false_pos,
+        s.false_neg,
+        s.near_error,
+        s.brier,
+    ];
+    let cells: Vec<String> = values
+        .iter()
+        .zip(digits)
+        .map(|(v, d)| format!("{v:.d$}"))
+        .collect();
+    cells.join(separator)
+}
+
+/// A line of `summary.csv` (with the share of budgets kept).
+fn summary_row(mesh: &str, label: &str, s: &Stats, exact_median: f64) -> String {
+    let columns = stat_columns(s, exact_median, [3, 3, 4, 3, 3, 3, 3, 5], ",");
+    format!("{mesh},{label},{columns},{:.1}", s.budget_kept)
+}
+
+/// A row of the printed table.
+fn table_row(mesh: &str, label: &str, s: &Stats, exact_median: f64) -> String {
+    let columns = stat_columns(s, exact_median, [1, 1, 2, 1, 1, 1, 1, 3], " | ");
+    format!("| {mesh} | {label} | {columns} |")
+}
+
 /// `name` in the output directory, with its header line written.
 fn create_csv(
     settings: &Settings,
@@ -649,6 +743,21 @@ fn write_outputs(
             "{name},exact,{:.3},{:.3},1,0,0,0,0,0,100",
             exact.median_us, exact.p99_us
         )?;
+        // The exact query preceded by the certificate: in the table too, beside the exact one.
+        let c = Stats {
+            budget_kept: 100.0,
+            ..stats(records, |r| r.certified_exact)
+        };
+        writeln!(
+            summary,
+            "{}",
+            summary_row(name, CERTIFIED_EXACT_LABEL, &c, exact.median_us)
+        )?;
+        writeln!(
+            table,
+            "{}",
+            table_row(&tris_note, CERTIFIED_EXACT_LABEL, &c, exact.median_us)
+        )?;
         for (k, c) in configs.iter().enumerate() {
             let mut s = stats(records, |r| r.adb[k]);
             if let Budget::Time(t) = c.query.budget {
@@ -659,33 +768,16 @@ fn write_outputs(
             }
             writeln!(
                 summary,
-                "{name},{},{:.3},{:.3},{:.4},{:.3},{:.3},{:.3},{:.3},{:.5},{:.1}",
-                c.label,
-                s.median_us,
-                s.p99_us,
-                s.median_us / exact.median_us,
-                s.error,
-                s.false_pos,
-                s.false_neg,
-                s.near_error,
-                s.brier,
-                s.budget_kept
+                "{}",
+                summary_row(name, &c.label, &s, exact.median_us)
             )?;
             // The table shows the headline configurations, the variants table the others
             // worth comparing; summary.csv has them all.
             if HEADLINE_LABELS.contains(&c.label.as_str()) {
                 writeln!(
                     table,
-                    "| {tris_note} | {} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {:.3} |",
-                    c.label,
-                    s.median_us,
-                    s.p99_us,
-                    s.median_us / exact.median_us,
-                    s.error,
-                    s.false_pos,
-                    s.false_neg,
-                    s.near_error,
-                    s.brier
+                    "{}",
+                    table_row(&tris_note, &c.label, &s, exact.median_us)
                 )?;
             }
         }
@@ -853,9 +945,13 @@ fn write_targets(
         let d = stats(records, |r| r.adb[default]);
         let b = stats(records, |r| r.adb[budget]);
         let ratio = d.median_us / exact_median;
+        let certified_median = stats(records, |r| r.certified_exact).median_us;
         let bound = bounds.get(name).map_or(String::new(), |o| {
             format!(", oracle bound {:.2}×", o.median_us / exact_median)
-        });
+        }) + &format!(
+            "; {:.2}× the certificate + exact median",
+            d.median_us / certified_median
+        );
         let ratio_note = if tris >= TARGET_RATIO_TRIANGLES {
             format!("{ratio:.2}× exact ({}{bound})", mark(ratio <= TARGET_RATIO))
         } else {

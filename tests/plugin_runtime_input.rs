@@ -238,13 +238,50 @@ fn adb_node_pairs_of_two_balls(config: CollisionConfig, distance: f32) -> u64 {
 }
 
 #[test]
+fn the_configured_adb_interior_is_the_one_the_queries_use() {
+    // Deeply overlapping balls: with the interpenetration certificate (the default) the pair is
+    // settled before any node pair below the roots, its contact the sample found inside, as
+    // deep as the sample lies and pushing the second ball away along +x; without it, the
+    // traversal answers the same after many node pairs.
+    let with = CollisionConfig {
+        budget: FrameBudget::Unlimited,
+        ..Default::default()
+    };
+    let mut app = app_with(with.clone(), 1);
+    spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
+    spawn(&mut app, (ball(1.0), at(1.0, 0.0, 0.0)));
+    app.update();
+    let o = app.world().resource::<PairOutcomes>().outcomes()[0].clone();
+    assert!(
+        o.method == Method::Adb && o.collides && o.probability == 1.0,
+        "{o:?}"
+    );
+    assert_eq!(o.node_pairs, 1);
+    let c = o.contacts[0];
+    assert!(
+        c.triangles.is_none() && c.depth > 0.0 && c.depth < 1.0,
+        "{c:?}"
+    );
+    let centre = |e: Entity| app.world().get::<ColliderPose>(e).unwrap().0.translation;
+    let apart = (centre(o.b) - centre(o.a)).normalize();
+    assert!(c.normal.dot(apart) > 0.9, "{c:?} against {apart}");
+    let without = CollisionConfig {
+        adb_interior: false,
+        ..with
+    };
+    assert!(adb_node_pairs_of_two_balls(without, 1.0) > 1);
+}
+
+#[test]
 fn the_configured_adb_decision_is_the_one_the_queries_use() {
     // Deeply overlapping balls, estimated leaves: the evidence decision stops as soon as a few
     // confident pairs carry `p_min`, the confidence decision waits for `k_min` of them.
     let visited = |adb_decision: Decision| {
+        // The decision alone: no interpenetration certificate settles the pose first.
         let config = CollisionConfig {
             adb_exact_leaves: false,
             adb_decision,
+            adb_interior: false,
             ..Default::default()
         };
         adb_node_pairs_of_two_balls(config, 1.0)
@@ -261,6 +298,7 @@ fn the_configured_adb_order_is_the_one_the_queries_use() {
     let visited = |adb_order: Order| {
         let config = CollisionConfig {
             adb_order,
+            adb_interior: false,
             ..Default::default()
         };
         adb_node_pairs_of_two_balls(config, 1.95)

@@ -186,13 +186,13 @@ fn bucket(pair: &NodePair<'_>) -> usize {
 }
 
 #[inline]
-fn raw_bin(raw: f64) -> usize {
+pub(super) fn raw_bin(raw: f64) -> usize {
     ((raw * RAW_BINS as f64) as usize).min(RAW_BINS - 1)
 }
 
 /// Per-bin hit rates with a Beta(½, ½) prior, made non-decreasing by pooling adjacent
 /// violators (weighted by sample counts); empty bins take their neighbours' values.
-fn monotone_rates(cells: &[(u32, u32); RAW_BINS]) -> [f32; RAW_BINS] {
+pub(super) fn monotone_rates(cells: &[(u32, u32); RAW_BINS]) -> [f32; RAW_BINS] {
     // Blocks of (weight, rate, first bin, last bin) over the non-empty bins.
     let mut blocks: Vec<(f64, f64, usize, usize)> = Vec::new();
     for (i, &(n, hits)) in cells.iter().enumerate() {

@@ -16,21 +16,26 @@
 //!   confidence, whether the budget ran out, and where the contact probably is.
 
 pub mod cells;
+mod confidence_fit;
 mod estimator;
 mod fit;
+mod interior;
 pub mod probability;
 mod queue;
 pub mod tables;
 mod traverse;
 mod tree;
 
+pub use confidence_fit::ConfidenceCalibration;
 pub use estimator::{
     CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator, PlanarityEstimator,
     eq9_probability,
 };
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
+pub use interior::{InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES};
 pub use traverse::{
-    AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, EVIDENCE_REDUNDANCY,
-    FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR, TIME_CHECK_INTERVAL, adb_intersects,
+    APPROXIMATE_INTERIOR_CONFIDENCE, AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness,
+    Decision, EVIDENCE_REDUNDANCY, FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR,
+    TIME_CHECK_INTERVAL, adb_intersects,
 };
 pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};

@@ -5,6 +5,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
+use super::interior::Interpenetration;
 use super::queue::{Entry, Queue};
 use super::tree::{AdbTree, nodes_overlap, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
@@ -98,7 +99,20 @@ pub struct AdbQuery {
     /// would pass through a wall), raise it where a false contact costs more. An answer with
     /// confidence 0 never says "collision".
     pub collide_at: f64,
+    /// After how many queue pops without an answer the traversal tries the interpenetration
+    /// certificate, once ([`InteriorMap::certify`](super::InteriorMap::certify), both ways): a
+    /// surface sample of one mesh inside the other and one of the same connected surface
+    /// outside it prove that the surfaces cross, so the query ends with "collision" there.
+    /// `None` never tries it; neither does a query between trees built without an
+    /// [`InteriorMap`](super::InteriorMap). With a map that is not
+    /// [exact](super::InteriorMap::is_exact) (an open mesh) the certificate's confidence is
+    /// [`APPROXIMATE_INTERIOR_CONFIDENCE`] and it counts only if that reaches `p_min`.
+    pub interior_after: Option<u32>,
 }
+
+/// The confidence of an interpenetration certificate found in the map of an open mesh
+/// ([`AdbQuery::interior_after`]).
+pub const APPROXIMATE_INTERIOR_CONFIDENCE: f64 = 0.99;
 
 /// The order in which [`adb_intersects`] expands node pairs. Whichever the order, the frontier
 /// (every queued, leaf and pruned pair) covers all overlapping leaf pairs, the same rules
@@ -209,6 +223,7 @@ impl Default for AdbQuery {
             decision: Decision::Confidence,
             order: Order::Straddle,
             collide_at: 0.5,
+            interior_after: Some(0),
         }
     }
 }
@@ -223,6 +238,7 @@ impl AdbQuery {
             decision: Decision::Paper,
             order: Order::BestFirst,
             exact_leaves: false,
+            interior_after: None,
             ..Self::default()
         }
     }
@@ -280,6 +296,11 @@ pub struct AdbOutcome {
     /// Where the collision probably is: the most probable node pair seen, or the exact hit
     /// (`None` if no node pair below the roots overlapped).
     pub witness: Option<ContactWitness>,
+    /// The interpenetration certificate that settled the answer, if one did
+    /// ([`AdbQuery::interior_after`]): then the witness has no triangle pair, its point is the
+    /// sample found inside and its normal points from the first mesh's box centre to the
+    /// second's.
+    pub interpenetration: Option<Interpenetration>,
 }
 
 /// Reusable memory of the ADB traversal (the queue and the exact-leaf workspace).
@@ -340,6 +361,7 @@ pub fn adb_intersects(
         budget_exhausted: false,
         max_pair_probability: 0.0,
         witness: None,
+        interpenetration: None,
     };
     // A pose that is not finite places its mesh nowhere.
     if !rel.is_finite() || !nodes_overlap(a, b, &frame, 0, 0) {
@@ -425,6 +447,50 @@ pub fn adb_intersects(
                 *best = Some((key, ia, ib));
             }
         };
+    // Whether the interpenetration certificate was tried and settled nothing.
+    let mut interior_failed = false;
+    // The interpenetration certificate (both ways), once: `true` when it settled the answer.
+    let mut interior = |out: &mut AdbOutcome| {
+        let (Some(map_a), Some(map_b)) = (a.interior(), b.interior()) else {
+            return false;
+        };
+        interior_failed = true;
+        let found = map_b
+            .certify(map_a, &rel)
+            .map(|c| (c, pose_a))
+            .or_else(|| map_a.certify(map_b, &rel.inverse()).map(|c| (c, pose_b)));
+        let Some((cert, frame_pose)) = found else {
+            return false;
+        };
+        let confidence = if cert.exact {
+            1.0
+        } else {
+            APPROXIMATE_INTERIOR_CONFIDENCE
+        };
+        if confidence < query.p_min {
+            return false;
+        }
+        interior_failed = false;
+        out.collides = true;
+        out.probability = confidence;
+        out.max_pair_probability = out.max_pair_probability.max(confidence);
+        out.pairs_found += 1;
+        let (ca, cb) = (
+            pose_a.transform_point(na[0].aabb().center()),
+            pose_b.transform_point(nb[0].aabb().center()),
+        );
+        out.interpenetration = Some(cert);
+        out.witness = Some(ContactWitness {
+            point: frame_pose.transform_point(cert.inside_point),
+            normal: (cb - ca).try_normalize().unwrap_or(Vec3::Y),
+            nodes: (0, 0),
+            triangles: None,
+        });
+        true
+    };
+    if query.interior_after == Some(0) && interior(&mut out) {
+        return out;
+    }
     let mut pops = 0u32;
     // Work since the last clock read, in pops (a leaf pair's triangle tests count too).
     let mut unclocked = 0u32;
@@ -457,6 +523,9 @@ pub fn adb_intersects(
     'queue: while let Some(mut e) = ws.queue.pop() {
         pops += 1;
         unclocked += 1;
+        if query.interior_after == Some(pops) && interior(&mut out) {
+            return out;
+        }
         // The root pair is always expanded: a budget cannot end a query before it has looked.
         let over = pops > 1
             && match query.budget {
@@ -635,6 +704,15 @@ pub fn adb_intersects(
         // independent piece, as in the evidence rules.
         let log_miss = (frontier_log_miss + queued) / EVIDENCE_REDUNDANCY;
         out.probability = (1.0 - log_miss.exp()).clamp(0.0, 1.0);
+        if interior_failed && out.probability > 0.0 && out.probability < 1.0 {
+            // A failed certificate is evidence against the deep overlaps: the confidence as
+            // calibrated for such answers on the meshes themselves (the mean of the two fits).
+            let fitted = [a, b].map(|t| {
+                t.confidence_calibration()
+                    .map_or(out.probability, |c| c.map(out.probability))
+            });
+            out.probability = ((fitted[0] + fitted[1]) * 0.5).clamp(0.0, MAX_ESTIMATE);
+        }
         if !out.collides {
             out.collides = match query.decision {
                 Decision::Confidence | Decision::Evidence => {

@@ -7,8 +7,10 @@ use glam::Vec3;
 use std::sync::Arc;
 
 use super::cells::{CellGrid, CellScratch, count_well_filled};
+use super::confidence_fit::ConfidenceCalibration;
 use super::estimator::PlanarityEstimator;
 use super::fit::{Calibration, FitOptions, FittedEstimator};
+use super::interior::InteriorMap;
 use crate::bvh::CollisionMesh;
 use crate::bvh::box_test::{FirstBox, RelativeFrame, SecondBox};
 use crate::geometry::Aabb;
@@ -33,6 +35,13 @@ pub struct AdbBuildOptions {
     /// "estimate parameters" step; used by the default
     /// [`CalibratedEstimator`](super::CalibratedEstimator)). `None` skips it.
     pub fit: Option<FitOptions>,
+    /// Voxels along the longest side of the mesh's box in its [`InteriorMap`] (the map of its
+    /// inside and outside that the interpenetration certificate looks surface samples up in:
+    /// [`AdbQuery::interior_after`](super::AdbQuery::interior_after)); 0 builds no map.
+    pub interior_resolution: u32,
+    /// Surface samples of the mesh that the certificate looks up in the other mesh's map (at
+    /// most [`MAX_SURFACE_SAMPLES`](super::MAX_SURFACE_SAMPLES)).
+    pub interior_samples: usize,
 }
 
 impl Default for AdbBuildOptions {
@@ -42,6 +51,8 @@ impl Default for AdbBuildOptions {
             fill_fraction: 0.5,
             threads: 0,
             fit: Some(FitOptions::default()),
+            interior_resolution: 128,
+            interior_samples: 128,
         }
     }
 }
@@ -105,6 +116,8 @@ pub struct AdbTree {
     max_depth: u32,
     resolution: u32,
     calibration: Option<Calibration>,
+    interior: Option<InteriorMap>,
+    confidence_calibration: Option<ConfidenceCalibration>,
 }
 
 impl AdbTree {
@@ -163,17 +176,25 @@ impl AdbTree {
             })
             .collect();
         node_slabs(&mesh, &mut nodes);
+        let interior = (options.interior_resolution > 0).then(|| {
+            InteriorMap::build(&mesh, options.interior_resolution, options.interior_samples)
+        });
         let mut tree = Self {
             mesh,
             nodes,
             max_depth,
             resolution,
             calibration: None,
+            interior,
+            confidence_calibration: None,
         };
         if let Some(fit) = options.fit {
             let base = Arc::new(PlanarityEstimator::default());
             tree.calibration =
                 Some(FittedEstimator::fit(&tree, &tree, base, fit).into_calibration());
+            if tree.interior.is_some() {
+                tree.confidence_calibration = ConfidenceCalibration::fit(&tree, fit);
+            }
         }
         tree
     }
@@ -182,6 +203,20 @@ impl AdbTree {
     #[inline]
     pub fn calibration(&self) -> Option<&Calibration> {
         self.calibration.as_ref()
+    }
+
+    /// The map of the mesh's inside and outside, with its surface samples (`None` when built
+    /// with `interior_resolution` 0).
+    #[inline]
+    pub fn interior(&self) -> Option<&InteriorMap> {
+        self.interior.as_ref()
+    }
+
+    /// The calibration of the confidence of answers a failed interpenetration certificate left
+    /// unsettled, fitted at build time (with a fit and an interior map), if any.
+    #[inline]
+    pub fn confidence_calibration(&self) -> Option<&ConfidenceCalibration> {
+        self.confidence_calibration.as_ref()
     }
 
     /// The mesh and its BVH.
@@ -217,6 +252,7 @@ impl AdbTree {
     /// Bytes held beyond the [`CollisionMesh`].
     pub fn extra_memory_bytes(&self) -> usize {
         self.nodes.capacity() * std::mem::size_of::<AdbNode>()
+            + self.interior.as_ref().map_or(0, InteriorMap::memory_bytes)
     }
 }
 

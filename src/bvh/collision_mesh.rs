@@ -98,8 +98,24 @@ impl CollisionMesh {
     }
 }
 
-/// One referenced vertex per connected component (union–find over triangle corners).
+/// One referenced vertex per connected component.
 fn component_vertices(mesh: &TriMesh) -> Vec<u32> {
+    let labels = component_labels(mesh);
+    let mut seen = vec![false; labels.len()];
+    let mut out = Vec::new();
+    for &[a, _, _] in mesh.triangles() {
+        let r = labels[a as usize] as usize;
+        if !seen[r] {
+            seen[r] = true;
+            out.push(a);
+        }
+    }
+    out
+}
+
+/// Per vertex, a label (a vertex index) shared by the vertices of one connected component:
+/// triangles sharing a vertex index are connected (union–find over triangle corners).
+pub(crate) fn component_labels(mesh: &TriMesh) -> Vec<u32> {
     let mut parent: Vec<u32> = (0..mesh.vertex_count() as u32).collect();
     fn find(parent: &mut [u32], mut v: u32) -> u32 {
         while parent[v as usize] != v {
@@ -118,14 +134,7 @@ fn component_vertices(mesh: &TriMesh) -> Vec<u32> {
             }
         }
     }
-    let mut seen = vec![false; parent.len()];
-    let mut out = Vec::new();
-    for &[a, _, _] in mesh.triangles() {
-        let r = find(&mut parent, a) as usize;
-        if !seen[r] {
-            seen[r] = true;
-            out.push(a);
-        }
-    }
-    out
+    (0..parent.len() as u32)
+        .map(|v| find(&mut parent, v))
+        .collect()
 }

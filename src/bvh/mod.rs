@@ -28,6 +28,7 @@ mod workspace;
 
 pub use build::BvhBuildOptions;
 pub use collision_mesh::CollisionMesh;
+pub(crate) use collision_mesh::component_labels;
 pub use distance::{MeshDistance, closest_points};
 pub use solid::contains_point;
 pub use traverse_pair::{

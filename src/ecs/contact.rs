@@ -2,7 +2,7 @@
 use glam::Vec3;
 
 use super::prepare::world_aabb;
-use crate::adb::ContactWitness;
+use crate::adb::{ContactWitness, Interpenetration};
 use crate::bvh::{CollisionMesh, TrianglePair};
 use crate::geometry::{Aabb, Pose};
 
@@ -63,6 +63,18 @@ pub(crate) fn triangle_pair_contact(
         normal,
         depth,
         triangles: Some(pair),
+    }
+}
+
+/// The contact of an interpenetration certificate: the sample found inside the other mesh, the
+/// witness's normal (from the first mesh's box centre to the second's), and how deep the sample
+/// lies.
+pub(crate) fn interpenetration_contact(w: &ContactWitness, c: &Interpenetration) -> ContactPoint {
+    ContactPoint {
+        point: w.point,
+        normal: w.normal,
+        depth: c.depth,
+        triangles: None,
     }
 }
 

@@ -18,7 +18,7 @@ use smallvec::SmallVec;
 use super::broad_phase::{CandidatePair, CandidatePairs};
 use super::budget::{SliceShare, WorkRate, pair_priority};
 use super::components::Fidelity;
-use super::contact::{ContactPoint, node_contact, triangle_pair_contact};
+use super::contact::{ContactPoint, interpenetration_contact, node_contact, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::plugin::{CollisionConfig, FrameBudget};
 use super::pool::CollisionTaskPool;
@@ -765,6 +765,7 @@ impl Context<'_> {
             decision: self.config.adb_decision,
             order: self.config.adb_order,
             collide_at: self.config.adb_collide_at,
+            interior_after: self.config.adb_interior.then_some(0),
             ..AdbQuery::default()
         }
     }
@@ -990,12 +991,13 @@ impl Context<'_> {
                 out.probability = r.probability;
                 out.budget_exhausted = r.budget_exhausted;
                 if r.collides {
-                    out.contacts.push(match r.witness {
-                        Some(w) => match w.triangles {
+                    out.contacts.push(match (r.witness, r.interpenetration) {
+                        (Some(w), Some(c)) => interpenetration_contact(&w, &c),
+                        (Some(w), None) => match w.triangles {
                             Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
                             None => node_contact(ma, &ea.pose, mb, &eb.pose, &w, r.probability),
                         },
-                        None => bounds_contact(ea, eb),
+                        (None, _) => bounds_contact(ea, eb),
                     });
                 }
             }

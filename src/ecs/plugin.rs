@@ -73,6 +73,11 @@ pub struct CollisionConfig {
     /// errors). Lower it where a missed contact costs more than a false one, as the
     /// `cannonball` example does for shots that would otherwise pass through the wall.
     pub adb_collide_at: f64,
+    /// ADB queries first try the interpenetration certificate
+    /// ([`AdbQuery::interior_after`](crate::adb::AdbQuery::interior_after)): a deep overlap is
+    /// settled by a few dozen voxel lookups instead of a traversal, its contact the sample
+    /// found inside the other mesh. On by default.
+    pub adb_interior: bool,
     /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
     /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
     /// (the pairs tested were chosen by what a test costs; one cut short would be wasted),
@@ -105,6 +110,7 @@ impl Default for CollisionConfig {
             adb_decision: Decision::Confidence,
             adb_order: Order::Straddle,
             adb_collide_at: 0.5,
+            adb_interior: true,
             min_slice: 4,
             max_slice: 4096,
             seed: 0x5eed,
