@@ -3,9 +3,11 @@
 //!
 //! Two copies of a mesh at random orientations approach each other along random directions;
 //! each pose sits at a random offset from first contact (in units of the mesh's size, the
-//! diagonal of its box). Every pose is answered exactly (ground truth, timed) and by ADB-trees
-//! over a sweep of `p_min`, `k_min`, time and node budgets and estimators. Only poses whose root
-//! boxes overlap count (as in the papers).
+//! diagonal of its box). Every pose is answered exactly (ground truth, timed), by the exact query
+//! preceded by the interpenetration certificate ("certificate + exact": what the certificate alone
+//! is worth), and by ADB-trees over a sweep of `p_min`, `k_min`, time and node budgets,
+//! estimators, orders and the certificate on or off ("no-interior"). Only poses whose root boxes
+//! overlap count (as in the papers).
 //!
 //! Timing: each method (the exact query, each configuration) answers all poses in turn before
 //! the next method starts, so no query runs on caches another method has just warmed on the

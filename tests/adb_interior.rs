@@ -9,8 +9,8 @@ use glam::{Quat, Vec3};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use stochastic_collision::adb::{
-    APPROXIMATE_INTERIOR_CONFIDENCE, AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, InteriorMap,
-    adb_intersects,
+    APPROXIMATE_INTERIOR_CONFIDENCE, AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace,
+    CERTIFY_CHUNK, InteriorMap, MAX_SURFACE_SAMPLES, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, contains_point, intersects};
 use stochastic_collision::geometry::Pose;
@@ -125,7 +125,9 @@ fn open_flat_empty_and_odd_input_give_no_false_inside() {
     assert_eq!(coarse.sample_count(), 0);
     assert!(coarse.certify(&coarse, &Pose::IDENTITY).is_none());
     let many = InteriorMap::build(&ball, 16, 1 << 20);
-    assert!(many.sample_count() <= ball.mesh().vertex_count().max(8) * 2);
+    assert_eq!(many.sample_count(), MAX_SURFACE_SAMPLES);
+    let few = InteriorMap::build(&ball, 16, 3);
+    assert_eq!(few.sample_count(), CERTIFY_CHUNK, "padded to a whole chunk");
 
     // Points and poses that are not finite are never classified or certified.
     let map = InteriorMap::build(&ball, 16, 64);

@@ -564,10 +564,12 @@ fn straddle_estimates_only_what_its_answers_need() {
         let mut visited = [0u64; 2];
         for (i, order) in [Order::Straddle, Order::DepthFirst].into_iter().enumerate() {
             let counting = Arc::new(CountingEstimator::default());
+            // The traversals alone: no certificate settles a pose first.
             let query = AdbQuery {
                 order,
                 p_min: 1.0,
                 estimator: counting.clone(),
+                interior_after: None,
                 ..AdbQuery::default()
             };
             let mut answers = Vec::new();

@@ -18,8 +18,9 @@
 //! centre agree. For an open mesh (holes, boundary edges) parity depends on the ray; the three
 //! rays must still agree, so a voxel seen through a hole stays unclassified, but the map is
 //! then an approximation ([`InteriorMap::is_exact`]).
-use glam::{DVec3, Mat3, UVec3, Vec3};
+use glam::{DVec3, Mat3, Vec3};
 
+use super::voxel_grid::VoxelGrid;
 use crate::bvh::{CollisionMesh, component_labels};
 use crate::geometry::Pose;
 use crate::mesh::Topology;
@@ -29,25 +30,24 @@ const UNKNOWN: u8 = 0;
 const OUTSIDE: u8 = 1;
 const INSIDE: u8 = 2;
 
-/// Most surface samples an [`InteriorMap`] keeps.
-pub const MAX_SURFACE_SAMPLES: usize = 1024;
+/// Most coarse surface samples an [`InteriorMap`] keeps (in at most 64 chunks).
+pub const MAX_SURFACE_SAMPLES: usize = 64 * CERTIFY_CHUNK;
+
+/// The component rank of samples whose component is not among the 63 largest: such samples
+/// never certify (components are tracked in a `u64`).
+const NO_COMPONENT: u8 = 63;
+
+/// Finer samples per coarse chunk, looked up only where the coarse samples came into or near
+/// the other mesh ([`InteriorMap::look_up`]): deep overlaps whose coarse samples straddle the
+/// other surface without one inside it get a denser look there.
+const REFINEMENT: usize = 64;
 
 /// Voxels searched in each direction for [`Interpenetration::depth`].
 const DEPTH_SEARCH_VOXELS: u32 = 64;
 
 /// Samples looked up between two checks of whether the certificate is found (a multiple of 4,
 /// at most 8: a chunk's 2-bit classes fill 16 bits).
-const CERTIFY_CHUNK: usize = 8;
-
-/// The grid's origin is moved off the mesh's box by this fraction of a voxel (on top of one
-/// voxel of padding), so that the rays through voxel centres rarely pass exactly through the
-/// vertices or edges of a mesh laid out on a regular grid.
-const GRID_SHIFT: f64 = 0.137_035_999;
-
-/// Voxels this close to a triangle (as a fraction of a voxel, on top of a relative `f32`
-/// rounding margin) count as touched by it: far more than the rounding of a sample's transform,
-/// so a sample found in an untouched voxel is on that voxel's side of the surface.
-const SURFACE_MARGIN: f32 = 1e-3;
+pub const CERTIFY_CHUNK: usize = 8;
 
 /// A voxel map of the inside and outside of a mesh, and the mesh's surface samples (see the
 /// module documentation). Built by [`InteriorMap::build`]; part of an
@@ -67,10 +67,7 @@ const SURFACE_MARGIN: f32 = 1e-3;
 /// ```
 #[derive(Debug, Clone)]
 pub struct InteriorMap {
-    origin: Vec3,
-    inv_cell: f32,
-    cell: f32,
-    dims: [u32; 3],
+    grid: VoxelGrid,
     /// The class of every voxel, 2 bits each, four to a byte (x fastest, then y, then z), so
     /// that a map of a million voxels takes a quarter of a megabyte and stays in cache.
     classes: Vec<u8>,
@@ -80,8 +77,9 @@ pub struct InteriorMap {
     samples: SurfaceSamples,
 }
 
-/// Points on one connected component of a mesh's surface (its largest), spread over it, in
-/// structure-of-arrays form, padded to whole chunks by repeating the last sample.
+/// Points on a mesh's surface, spread over it (with their connected components), in
+/// structure-of-arrays form, padded to whole chunks by repeating the last sample: the coarse
+/// samples, then per coarse chunk the finer samples of the same part of the surface.
 #[derive(Debug, Clone, Default)]
 struct SurfaceSamples {
     x: Vec<f32>,
@@ -89,8 +87,14 @@ struct SurfaceSamples {
     z: Vec<f32>,
     /// Per sample, the vertex it is.
     vertex: Vec<u32>,
+    /// Per sample, the size rank of its connected component (below [`NO_COMPONENT`]), or
+    /// [`NO_COMPONENT`].
+    component: Vec<u8>,
     /// Per chunk of [`CERTIFY_CHUNK`] samples, a sphere around them (centre, radius).
     chunk_spheres: Vec<(Vec3, f32)>,
+    /// The coarse samples' chunks (the first ones); the refinement of coarse chunk `c` is the
+    /// [`REFINEMENT`] samples after them at `coarse_chunks + c · REFINEMENT / CERTIFY_CHUNK`.
+    coarse_chunks: usize,
 }
 
 /// What [`InteriorMap::certify`] found: a sample of one surface inside the other mesh (and one
@@ -108,6 +112,19 @@ pub struct Interpenetration {
     pub depth: f32,
 }
 
+/// What [`InteriorMap::look_up`] found.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SampleLookup {
+    /// A sample inside the other mesh and one of the same surface outside it: the surfaces
+    /// cross.
+    Crossing(Interpenetration),
+    /// Every sample lies in a voxel classified outside the other mesh, or beyond its map.
+    AllOutside,
+    /// Neither: some sample lies near the other mesh's surface, where the rays disagree, or
+    /// inside it with none outside.
+    Undecided,
+}
+
 impl InteriorMap {
     /// Builds the map of `mesh` with `resolution` voxels along the longest side of its box
     /// (at least 1), and up to `samples` (at most [`MAX_SURFACE_SAMPLES`]) surface samples:
@@ -118,40 +135,16 @@ impl InteriorMap {
         let exact = !topology.edges().is_empty()
             && topology.edges().iter().all(|e| e.triangles.len() % 2 == 0);
         let samples = surface_samples(mesh, samples.min(MAX_SURFACE_SAMPLES));
-        let aabb = tri_mesh.aabb();
-        let extent = aabb.max - aabb.min;
-        let longest = extent.max_element();
-        if tri_mesh.triangle_count() == 0 || !longest.is_finite() || longest <= 0.0 {
-            return Self {
-                origin: Vec3::ZERO,
-                inv_cell: 0.0,
-                cell: 0.0,
-                dims: [0; 3],
-                classes: Vec::new(),
-                voxels: 0,
-                exact: false,
-                samples,
-            };
-        }
-        let resolution = resolution.clamp(1, 1024);
-        let cell = longest / resolution as f32;
-        let origin = aabb.min - Vec3::splat(cell * (1.0 + GRID_SHIFT as f32));
-        let dims = extent
-            .to_array()
-            .map(|e| (e / cell).ceil() as u32 + 3)
-            .map(|d| d.max(3));
-        let voxels: usize = dims.iter().map(|&d| d as usize).product();
+        let grid = VoxelGrid::around(tri_mesh, resolution);
+        let voxels = grid.voxels();
         let mut map = Self {
-            origin,
-            inv_cell: 1.0 / cell,
-            cell,
-            dims,
+            grid,
             classes: vec![0; voxels.div_ceil(4)],
             voxels,
-            exact,
+            exact: exact && voxels > 0,
             samples,
         };
-        let surface = map.surface_voxels(mesh);
+        let surface = grid.surface_voxels(tri_mesh);
         // Odd parity along each axis, one bit per axis.
         let mut odd = vec![0u8; voxels];
         for axis in 0..3 {
@@ -181,12 +174,13 @@ impl InteriorMap {
 
     /// Voxels along each axis (0 for an empty map).
     pub fn dims(&self) -> [u32; 3] {
-        self.dims
+        self.grid.dims
     }
 
-    /// Number of surface samples.
+    /// Number of coarse surface samples (the ones always looked up; each chunk of
+    /// [`CERTIFY_CHUNK`] of them has its finer samples besides).
     pub fn sample_count(&self) -> usize {
-        self.samples.x.len()
+        self.samples.coarse_chunks * CERTIFY_CHUNK
     }
 
     /// Voxels classified inside and outside (the rest are near the surface or undecided).
@@ -220,21 +214,11 @@ impl InteriorMap {
         }
     }
 
+    /// The class of the voxel holding `p`; beyond the map (which pads the mesh's box by a
+    /// voxel), outside.
     #[inline]
     fn class_at(&self, p: Vec3) -> u8 {
-        let q = (p - self.origin) * self.inv_cell;
-        // Beyond the map (which pads the mesh's box by a voxel) is outside; NaN compares false
-        // and lands in the checks below as outside the map too, but callers filter it.
-        if !(q.cmpge(Vec3::ZERO).all()) {
-            return OUTSIDE;
-        }
-        let (x, y, z) = (q.x as u32, q.y as u32, q.z as u32);
-        if x >= self.dims[0] || y >= self.dims[1] || z >= self.dims[2] {
-            return OUTSIDE;
-        }
-        let i =
-            (z as usize * self.dims[1] as usize + y as usize) * self.dims[0] as usize + x as usize;
-        self.class(i)
+        self.grid.voxel_of(p).map_or(OUTSIDE, |i| self.class(i))
     }
 
     /// The class of voxel `i`.
@@ -248,16 +232,27 @@ impl InteriorMap {
     /// connected component lies outside it (then the surfaces cross: see the module
     /// documentation). `None` if no sample pair shows it.
     pub fn certify(&self, other: &InteriorMap, to_other: &Pose) -> Option<Interpenetration> {
+        match self.look_up(other, to_other) {
+            SampleLookup::Crossing(found) => Some(found),
+            SampleLookup::AllOutside | SampleLookup::Undecided => None,
+        }
+    }
+
+    /// [`InteriorMap::certify`], and when it finds nothing, whether every sample lay outside
+    /// `other` (then the surfaces are at least apart where the samples are, and looking the
+    /// other way round is unlikely to find a crossing).
+    pub fn look_up(&self, other: &InteriorMap, to_other: &Pose) -> SampleLookup {
         if other.classes.is_empty() || self.samples.x.is_empty() || !to_other.is_finite() {
-            return None;
+            return SampleLookup::Undecided;
         }
         // The transform and the voxel lookup in one affine map, to voxel coordinates.
-        let m = Mat3::from_quat(to_other.rotation) * other.inv_cell;
-        let t = (to_other.translation - other.origin) * other.inv_cell;
+        let grid = &other.grid;
+        let m = Mat3::from_quat(to_other.rotation) * grid.inv_cell;
+        let t = (to_other.translation - grid.origin) * grid.inv_cell;
         let map = VoxelMap {
             rows: [m.row(0), m.row(1), m.row(2)],
             translation: t,
-            dims: other.dims.map(|d| d as f32),
+            dims: grid.dims.map(|d| d as f32),
         };
         let samples = &self.samples;
         // A chunk's voxel indices and on-map mask (`None`: its sphere lies beyond the map, so
@@ -266,7 +261,7 @@ impl InteriorMap {
         let prepare = |chunk: usize| {
             let (centre, radius) = samples.chunk_spheres[chunk];
             let q = m * centre + t;
-            let r = radius * other.inv_cell;
+            let r = radius * grid.inv_cell;
             if (0..3).any(|i| q[i] + r < 0.0 || q[i] - r > map.dims[i]) {
                 return None;
             }
@@ -282,105 +277,114 @@ impl InteriorMap {
             }
             Some((index, on_map))
         };
-        let chunks = samples.chunk_spheres.len();
-        let (mut inside_at, mut outside) = (None, false);
-        let mut next = prepare(0);
-        for chunk in 0..chunks {
-            let current = next;
-            if chunk + 1 < chunks {
-                next = prepare(chunk + 1);
+        // Scans `chunks`, one ahead: `Some(sample)` once a sample inside and one outside
+        // were seen (over all scans); sets bit `c` of `touched` for each chunk `c` of them
+        // with a sample inside or near the other surface.
+        // Per component rank, whether a sample of it was seen inside, outside.
+        let (mut inside_seen, mut outside_seen) = (0u64, 0u64);
+        // Per component rank, the first sample of it seen inside (for the witness).
+        let mut first_inside = [u16::MAX; 64];
+        let mut scan = |chunks: std::ops::Range<usize>, touched: &mut u64| {
+            let mut next = prepare(chunks.start);
+            for chunk in chunks.clone() {
+                let current = next;
+                if chunk + 1 < chunks.end {
+                    next = prepare(chunk + 1);
+                }
+                let Some((index, on_map)) = current else {
+                    for &c in &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK] {
+                        outside_seen |= 1 << c;
+                    }
+                    continue;
+                };
+                // The chunk's classes, 2 bits per sample, those off the map outside; then the
+                // samples inside and outside as bit masks, without a branch per sample.
+                let mut classes = 0u32;
+                for (k, &index) in index.iter().enumerate() {
+                    classes |= u32::from(other.class(index as usize)) << (2 * k);
+                }
+                let off_map = spread_bits(!on_map & ((1 << CERTIFY_CHUNK) - 1));
+                classes = (classes & !(off_map * 0b11)) | (off_map * u32::from(OUTSIDE));
+                let inside = (classes >> 1) & !classes & EVEN_BITS;
+                let outside_here = classes & !(classes >> 1) & EVEN_BITS;
+                let components = &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK];
+                for (k, &c) in components.iter().enumerate() {
+                    let is_inside = (inside >> (2 * k)) & 1;
+                    if is_inside != 0 && first_inside[usize::from(c)] == u16::MAX {
+                        first_inside[usize::from(c)] = (chunk * CERTIFY_CHUNK + k) as u16;
+                    }
+                    inside_seen |= u64::from(is_inside) << c;
+                    outside_seen |= u64::from((outside_here >> (2 * k)) & 1) << c;
+                }
+                if outside_here != EVEN_BITS {
+                    *touched |= 1 << (chunk % 64);
+                }
+                let crossing = inside_seen & outside_seen & !(1 << NO_COMPONENT);
+                if crossing != 0 {
+                    return Some(usize::from(
+                        first_inside[crossing.trailing_zeros() as usize],
+                    ));
+                }
             }
-            let Some((index, on_map)) = current else {
-                outside = true;
-                continue;
-            };
-            // The chunk's classes, 2 bits per sample, those off the map outside; then the
-            // samples inside and outside as bit masks, without a branch per sample.
-            let mut classes = 0u32;
-            for (k, &index) in index.iter().enumerate() {
-                classes |= u32::from(other.class(index as usize)) << (2 * k);
-            }
-            let off_map = spread_bits(!on_map & ((1 << CERTIFY_CHUNK) - 1));
-            classes = (classes & !(off_map * 0b11)) | (off_map * u32::from(OUTSIDE));
-            let inside = (classes >> 1) & !classes & EVEN_BITS;
-            let outside_here = classes & !(classes >> 1) & EVEN_BITS;
-            if inside != 0 && inside_at.is_none() {
-                inside_at = Some(chunk * CERTIFY_CHUNK + inside.trailing_zeros() as usize / 2);
-            }
-            outside |= outside_here != 0;
-            if let (Some(j), true) = (inside_at, outside) {
+            None
+        };
+        let coarse = samples.coarse_chunks;
+        let per_chunk = REFINEMENT / CERTIFY_CHUNK;
+        let mut touched = 0u64;
+        let mut found = scan(0..coarse, &mut touched);
+        // Refine where the coarse samples came into or near the other mesh (the coarse
+        // chunks are at most 64: a mesh's samples are at most MAX_SURFACE_SAMPLES).
+        let mut refined = 0u64;
+        let mut left = touched;
+        while found.is_none() && left != 0 {
+            let c = left.trailing_zeros() as usize;
+            left &= left - 1;
+            let first = coarse + c * per_chunk;
+            found = scan(first..first + per_chunk, &mut refined);
+        }
+        match found {
+            Some(j) => {
                 let p =
                     to_other.transform_point(Vec3::new(samples.x[j], samples.y[j], samples.z[j]));
-                return Some(Interpenetration {
+                SampleLookup::Crossing(Interpenetration {
                     inside_point: p,
                     vertex: samples.vertex[j],
                     exact: other.exact,
                     depth: other.depth_inside(p),
-                });
+                })
             }
+            None if touched == 0 => SampleLookup::AllOutside,
+            None => SampleLookup::Undecided,
         }
-        None
     }
 
     /// How far `p` (in this mesh's frame, in a voxel classified inside) is from the first voxel
     /// along one of the six axis directions that is not classified inside, from the centre of
     /// its voxel: at least half a voxel, at most [`DEPTH_SEARCH_VOXELS`] voxels.
     fn depth_inside(&self, p: Vec3) -> f32 {
-        let q = ((p - self.origin) * self.inv_cell).floor();
+        let grid = &self.grid;
+        let q = ((p - grid.origin) * grid.inv_cell).floor();
         let steps = (1..=DEPTH_SEARCH_VOXELS)
             .find(|&k| {
                 let k = k as f32;
                 [Vec3::X, Vec3::Y, Vec3::Z].iter().any(|&axis| {
                     [k, -k].iter().any(|&s| {
                         let c = q + axis * s + 0.5;
-                        self.class_at(self.origin + c * self.cell) != INSIDE
+                        self.class_at(grid.origin + c * grid.cell) != INSIDE
                     })
                 })
             })
             .unwrap_or(DEPTH_SEARCH_VOXELS);
-        (steps as f32 - 0.5) * self.cell
-    }
-
-    /// The voxels that a triangle comes near (its box, grown by the margin, overlaps them, and
-    /// so does its plane).
-    fn surface_voxels(&self, mesh: &CollisionMesh) -> Vec<bool> {
-        let mut surface = vec![false; self.voxels];
-        let [dx, dy, _] = self.dims.map(|d| d as usize);
-        let half = self.cell * 0.5;
-        for t in 0..mesh.mesh().triangle_count() {
-            let [a, b, c] = mesh.mesh().triangle(t);
-            let scale = a.abs().max(b.abs()).max(c.abs()).max_element();
-            let margin = self.cell * SURFACE_MARGIN + scale * 1e-5;
-            let lo = (a.min(b).min(c) - Vec3::splat(margin) - self.origin) * self.inv_cell;
-            let hi = (a.max(b).max(c) + Vec3::splat(margin) - self.origin) * self.inv_cell;
-            let lo = lo.floor().max(Vec3::ZERO).as_uvec3();
-            let max = UVec3::from(self.dims) - UVec3::ONE;
-            let hi = hi.floor().max(Vec3::ZERO).as_uvec3().min(max);
-            let n = (b - a).cross(c - a);
-            let reach = n.abs().dot(Vec3::splat(half)) + n.length() * margin;
-            for z in lo.z..=hi.z {
-                for y in lo.y..=hi.y {
-                    for x in lo.x..=hi.x {
-                        let centre = self.origin
-                            + (Vec3::new(x as f32, y as f32, z as f32) + 0.5) * self.cell;
-                        // A degenerate triangle (n = 0) marks its whole box.
-                        if n.dot(centre - a).abs() <= reach * (1.0 + 1e-4) {
-                            surface[(z as usize * dy + y as usize) * dx + x as usize] = true;
-                        }
-                    }
-                }
-            }
-        }
-        surface
+        (steps as f32 - 0.5) * grid.cell
     }
 
     /// Sets bit `axis` of `odd` for every voxel whose centre has an odd number of surface
     /// crossings below it along `axis` (on the ray through the voxel centres of its row).
     fn axis_parity(&self, mesh: &CollisionMesh, axis: usize, odd: &mut [u8]) {
         let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let dims = self.dims.map(|d| d as usize);
-        let origin = self.origin.as_dvec3();
-        let cell = f64::from(self.cell);
+        let dims = self.grid.dims.map(|d| d as usize);
+        let origin = self.grid.origin.as_dvec3();
+        let cell = f64::from(self.grid.cell);
         let row_centre = |i: usize, k: usize| origin[k] + (i as f64 + 0.5) * cell;
         // (row, coordinate along the axis) of every crossing.
         let mut crossings: Vec<(u32, f64)> = Vec::new();
@@ -587,34 +591,46 @@ fn surface_samples(mesh: &CollisionMesh, count: usize) -> SurfaceSamples {
     if triangles.is_empty() || count == 0 {
         return samples;
     }
+    // Components ranked by size (0 the largest; the ones beyond the 63 largest share rank 63,
+    // which never certifies).
     let labels = component_labels(mesh.mesh());
     let mut sizes = std::collections::HashMap::<u32, usize>::new();
     for tri in triangles {
         *sizes.entry(labels[tri[0] as usize]).or_default() += 1;
     }
-    let largest = sizes
+    let mut ranked: Vec<(usize, u32)> = sizes.iter().map(|(&label, &n)| (n, label)).collect();
+    ranked.sort_by_key(|&(n, label)| (std::cmp::Reverse(n), label));
+    let rank: std::collections::HashMap<u32, u8> = ranked
         .iter()
-        .max_by_key(|&(&label, &n)| (n, std::cmp::Reverse(label)))
-        .map(|(&label, _)| label)
-        .expect("a mesh with triangles has a component");
-    let order: Vec<u32> = mesh
-        .bvh()
-        .leaf_triangles()
-        .iter()
-        .copied()
-        .filter(|&t| labels[triangles[t as usize][0] as usize] == largest)
+        .enumerate()
+        .map(|(i, &(_, label))| (label, i.min(usize::from(NO_COMPONENT)) as u8))
         .collect();
+    let order = mesh.bvh().leaf_triangles();
     let count = count.min(order.len());
-    for j in 0..count.next_multiple_of(CERTIFY_CHUNK) {
-        let j = j.min(count - 1);
-        let t = order[(j * order.len() + order.len() / 2) / count] as usize;
-        let vertex = triangles[t][0];
+    let mut push = |position: usize| {
+        let vertex = triangles[order[position] as usize][0];
         let p = positions[vertex as usize];
         samples.x.push(p.x);
         samples.y.push(p.y);
         samples.z.push(p.z);
         samples.vertex.push(vertex);
+        samples.component.push(rank[&labels[vertex as usize]]);
+    };
+    // The coarse samples: one per equal share of the leaf order, padded to whole chunks.
+    let coarse = count.next_multiple_of(CERTIFY_CHUNK);
+    for j in 0..coarse {
+        push((j.min(count - 1) * order.len() + order.len() / 2) / count);
     }
+    // The refinement of each coarse chunk: REFINEMENT samples spread over the share of the
+    // leaf order its samples stand for.
+    let share = |c: usize| (c * CERTIFY_CHUNK).min(count) * order.len() / count;
+    for c in 0..coarse / CERTIFY_CHUNK {
+        let (from, to) = (share(c), share(c + 1).max(share(c) + 1).min(order.len()));
+        for j in 0..REFINEMENT {
+            push(from + (j * (to - from) + (to - from) / 2) / REFINEMENT);
+        }
+    }
+    samples.coarse_chunks = coarse / CERTIFY_CHUNK;
     samples.chunk_spheres = (0..samples.x.len())
         .step_by(CERTIFY_CHUNK)
         .map(|start| {

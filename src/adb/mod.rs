@@ -25,6 +25,7 @@ mod queue;
 pub mod tables;
 mod traverse;
 mod tree;
+mod voxel_grid;
 
 pub use confidence_fit::ConfidenceCalibration;
 pub use estimator::{
@@ -32,7 +33,9 @@ pub use estimator::{
     eq9_probability,
 };
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
-pub use interior::{InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES};
+pub use interior::{
+    CERTIFY_CHUNK, InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, SampleLookup,
+};
 pub use traverse::{
     APPROXIMATE_INTERIOR_CONFIDENCE, AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness,
     Decision, EVIDENCE_REDUNDANCY, FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR,

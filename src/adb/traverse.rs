@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
-use super::interior::Interpenetration;
+use super::interior::{Interpenetration, SampleLookup};
 use super::queue::{Entry, Queue};
 use super::tree::{AdbTree, nodes_overlap, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
@@ -455,10 +455,14 @@ pub fn adb_intersects(
             return false;
         };
         interior_failed = true;
-        let found = map_b
-            .certify(map_a, &rel)
-            .map(|c| (c, pose_a))
-            .or_else(|| map_a.certify(map_b, &rel.inverse()).map(|c| (c, pose_b)));
+        // The second mesh's samples in the first's map; the other way round only when some
+        // sample came near or into the first mesh (when all lay outside it, the first mesh's
+        // samples would almost never find a crossing: a pose short of contact).
+        let found = match map_b.look_up(map_a, &rel) {
+            SampleLookup::Crossing(c) => Some((c, pose_a)),
+            SampleLookup::AllOutside => None,
+            SampleLookup::Undecided => map_a.certify(map_b, &rel.inverse()).map(|c| (c, pose_b)),
+        };
         let Some((cert, frame_pose)) = found else {
             return false;
         };
