@@ -25,10 +25,15 @@ use crate::bvh::{CollisionMesh, component_labels};
 use crate::geometry::Pose;
 use crate::mesh::Topology;
 
-/// Class of a voxel in an [`InteriorMap`].
-const UNKNOWN: u8 = 0;
+/// Class of a voxel in an [`InteriorMap`]: a triangle comes near it.
+const SURFACE: u8 = 0;
+/// Class of a voxel wholly outside.
 const OUTSIDE: u8 = 1;
+/// Class of a voxel wholly inside.
 const INSIDE: u8 = 2;
+/// Class of a voxel no triangle comes near whose three rays disagree (an open mesh, seen
+/// through a hole).
+const AMBIGUOUS: u8 = 3;
 
 /// Most coarse surface samples an [`InteriorMap`] keeps (in at most 64 chunks).
 pub const MAX_SURFACE_SAMPLES: usize = 64 * CERTIFY_CHUNK;
@@ -118,10 +123,11 @@ pub enum SampleLookup {
     /// A sample inside the other mesh and one of the same surface outside it: the surfaces
     /// cross.
     Crossing(Interpenetration),
-    /// Every sample lies in a voxel classified outside the other mesh, or beyond its map.
+    /// No sample lies inside the other mesh or near its surface: every one is in a voxel
+    /// classified outside, beyond the map, or where the map's rays disagree (an open mesh).
     AllOutside,
-    /// Neither: some sample lies near the other mesh's surface, where the rays disagree, or
-    /// inside it with none outside.
+    /// Neither: some sample lies near the other mesh's surface, or inside it with no sample
+    /// of the same component outside.
     Undecided,
 }
 
@@ -151,14 +157,18 @@ impl InteriorMap {
             map.axis_parity(mesh, axis, &mut odd);
         }
         for i in 0..voxels {
+            // All three rays must agree where parity is the same along every ray (then a
+            // disagreement is a rounding accident); where it is not (an open mesh), two of
+            // three decide, and the map is an approximation anyway.
+            let votes = odd[i].count_ones();
             let class = if surface[i] {
-                UNKNOWN
+                SURFACE
+            } else if votes == 3 || (!exact && votes == 2) {
+                INSIDE
+            } else if votes == 0 || (!exact && votes == 1) {
+                OUTSIDE
             } else {
-                match odd[i] {
-                    0 => OUTSIDE,
-                    0b111 => INSIDE,
-                    _ => UNKNOWN,
-                }
+                AMBIGUOUS
             };
             map.classes[i / 4] |= class << (2 * (i % 4));
         }
@@ -316,7 +326,9 @@ impl InteriorMap {
                     inside_seen |= u64::from(is_inside) << c;
                     outside_seen |= u64::from((outside_here >> (2 * k)) & 1) << c;
                 }
-                if outside_here != EVEN_BITS {
+                // Inside or near the other surface (class 0 or 2: bit 0 clear); a voxel where
+                // the rays disagree says nothing of where the surface is.
+                if !classes & EVEN_BITS != 0 {
                     *touched |= 1 << (chunk % 64);
                 }
                 let crossing = inside_seen & outside_seen & !(1 << NO_COMPONENT);
