@@ -5,7 +5,7 @@
 //! cargo run --release --example profile -- --scene pile|cannonball|cloth|intestine \
 //!     [--frames N] [--entities N] [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
 //!     [--adb-decision confidence|evidence] \
-//!     [--adb-order straddle|depth-first|evidence-first|best-first] \
+//!     [--adb-order straddle|depth-first|evidence-first|best-first] [--adb-interior on|off] \
 //!     [--json out.json] [--svg out.svg]
 //! ```
 //!
@@ -14,7 +14,9 @@
 //! budget of N ADB node pairs per frame (deterministic: the same run for any thread count,
 //! which is how to compare thread counts fairly). `--adb-decision` sets how the ADB queries
 //! decide (`CollisionConfig::adb_decision`, default `confidence`), `--adb-order` in which order
-//! they expand node pairs (`CollisionConfig::adb_order`, default `straddle`).
+//! they expand node pairs (`CollisionConfig::adb_order`, default `straddle`), `--adb-interior`
+//! whether they try the interpenetration certificate first (`CollisionConfig::adb_interior`,
+//! default `on`).
 //!
 //! JSON fields: `scene`, `frames`, `threads`, `budget_us`, `stages` (by name: `mean_us`,
 //! `p50_us`, `p99_us` over the frames the stage ran, `runs`), `collision_p99_us` (Prepare to
@@ -75,6 +77,13 @@ fn parse() -> Result<Args, String> {
                 args.options.adb_decision = Some(parse_choice(&value()?, &flag, DECISIONS)?)
             }
             "--adb-order" => args.options.adb_order = Some(parse_choice(&value()?, &flag, ORDERS)?),
+            "--adb-interior" => {
+                args.options.adb_interior = Some(parse_choice(
+                    &value()?,
+                    &flag,
+                    &[("on", true), ("off", false)],
+                )?)
+            }
             "--json" => args.json = Some(value()?),
             "--svg" => args.svg = Some(value()?),
             "-h" | "--help" => return Err(String::new()),
@@ -103,7 +112,7 @@ fn main() {
                  [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
                  [--adb-decision confidence|evidence] \
                  [--adb-order straddle|depth-first|evidence-first|best-first] \
-                 [--json out.json] [--svg out.svg]"
+                 [--adb-interior on|off] [--json out.json] [--svg out.svg]"
             );
             std::process::exit(2);
         }

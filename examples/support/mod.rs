@@ -33,6 +33,8 @@ pub struct Options {
     pub adb_decision: Option<Decision>,
     /// In which order ADB queries expand node pairs (default: the plugin's).
     pub adb_order: Option<Order>,
+    /// Whether ADB queries try the interpenetration certificate first (default: the plugin's).
+    pub adb_interior: Option<bool>,
 }
 
 impl Default for Options {
@@ -46,6 +48,7 @@ impl Default for Options {
             fidelity: None,
             adb_decision: None,
             adb_order: None,
+            adb_interior: None,
         }
     }
 }
@@ -65,6 +68,7 @@ impl Options {
             default_fidelity: self.fidelity.unwrap_or(defaults.default_fidelity),
             adb_decision: self.adb_decision.unwrap_or(defaults.adb_decision),
             adb_order: self.adb_order.unwrap_or(defaults.adb_order),
+            adb_interior: self.adb_interior.unwrap_or(defaults.adb_interior),
             ..defaults
         }
     }
