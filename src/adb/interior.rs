@@ -15,9 +15,15 @@
 //! or made of several components as it may be), the parity is the same along every ray, it
 //! changes exactly where a path crosses the surface, and the certificate is exact: a voxel is
 //! classified only when no triangle comes near it and the three axis-aligned rays through its
-//! centre agree. For an open mesh (holes, boundary edges) parity depends on the ray; the three
-//! rays must still agree, so a voxel seen through a hole stays unclassified, but the map is
-//! then an approximation ([`InteriorMap::is_exact`]).
+//! centre agree. For an open mesh (holes, boundary edges) parity depends on the ray: two of the
+//! three rays decide, and the map is an approximation ([`InteriorMap::is_exact`]).
+//!
+//! The samples are vertices spread over the surface in the BVH's leaf order (so spatially
+//! coherent chunks), each with its connected component: an inside and an outside sample must
+//! belong to one component. A few coarse samples are always looked up; each chunk of them has
+//! finer samples of the same part of the surface, looked up only when a coarse sample of the
+//! chunk came into or near the other mesh, where a deep overlap whose coarse samples missed
+//! the other's inside is found.
 use glam::{DVec3, Mat3, Vec3};
 
 use super::voxel_grid::VoxelGrid;

@@ -100,13 +100,17 @@ pub struct AdbQuery {
     /// confidence 0 never says "collision".
     pub collide_at: f64,
     /// After how many queue pops without an answer the traversal tries the interpenetration
-    /// certificate, once ([`InteriorMap::certify`](super::InteriorMap::certify), both ways): a
-    /// surface sample of one mesh inside the other and one of the same connected surface
-    /// outside it prove that the surfaces cross, so the query ends with "collision" there.
-    /// `None` never tries it; neither does a query between trees built without an
-    /// [`InteriorMap`](super::InteriorMap). With a map that is not
+    /// certificate, once ([`InteriorMap::look_up`](super::InteriorMap::look_up): the second
+    /// mesh's surface samples in the first mesh's map, then the other way round unless every
+    /// sample lay outside): a surface sample of one mesh inside the other and one of the same
+    /// connected surface outside it prove that the surfaces cross, so the query ends with
+    /// "collision" there. `None` never tries it; neither does a query between trees built
+    /// without an [`InteriorMap`](super::InteriorMap). With a map that is not
     /// [exact](super::InteriorMap::is_exact) (an open mesh) the certificate's confidence is
-    /// [`APPROXIMATE_INTERIOR_CONFIDENCE`] and it counts only if that reaches `p_min`.
+    /// [`APPROXIMATE_INTERIOR_CONFIDENCE`] and it counts only if that reaches `p_min`, so with
+    /// `p_min = 1` the answer stays the exact query's. `Some(0)` (before the traversal) by
+    /// default: on the `accuracy_vs_time` poses, trying it after 2 to 32 pops was slower at
+    /// every value (the pops cost the deep overlaps more than the certificate costs the rest).
     pub interior_after: Option<u32>,
 }
 
