@@ -254,9 +254,9 @@ impl InteriorMap {
         }
     }
 
-    /// [`InteriorMap::certify`], and when it finds nothing, whether every sample lay outside
-    /// `other` (then the surfaces are at least apart where the samples are, and looking the
-    /// other way round is unlikely to find a crossing).
+    /// [`InteriorMap::certify`], and when it finds nothing, whether no sample came into or near
+    /// `other` (then the surfaces are apart where the samples are, and looking the other way
+    /// round is unlikely to find a crossing).
     pub fn look_up(&self, other: &InteriorMap, to_other: &Pose) -> SampleLookup {
         if other.classes.is_empty() || self.samples.x.is_empty() || !to_other.is_finite() {
             return SampleLookup::Undecided;
@@ -293,13 +293,14 @@ impl InteriorMap {
             }
             Some((index, on_map))
         };
-        // Scans `chunks`, one ahead: `Some(sample)` once a sample inside and one outside
-        // were seen (over all scans); sets bit `c` of `touched` for each chunk `c` of them
-        // with a sample inside or near the other surface.
         // Per component rank, whether a sample of it was seen inside, outside.
         let (mut inside_seen, mut outside_seen) = (0u64, 0u64);
         // Per component rank, the first sample of it seen inside (for the witness).
         let mut first_inside = [u16::MAX; 64];
+        // Scans `chunks`, one ahead: `Some(sample)` (the first seen inside of its component)
+        // once a sample of one component was seen inside and one outside, over all scans; sets
+        // bit `c % 64` of `touched` for each chunk `c` with a sample inside or near the other
+        // surface.
         let mut scan = |chunks: std::ops::Range<usize>, touched: &mut u64| {
             let mut next = prepare(chunks.start);
             for chunk in chunks.clone() {
