@@ -72,15 +72,12 @@ impl ConfidenceCalibration {
         })
     }
 
-    /// The calibrated confidence of a raw frontier confidence.
+    /// The calibrated confidence of a raw frontier confidence (every bin has a value: the fit
+    /// keeps a calibration only when some answer was sampled, and empty bins take their
+    /// neighbours').
     #[inline]
     pub fn map(&self, raw: f64) -> f64 {
-        let fitted = self.table[raw_bin(raw.clamp(0.0, 1.0))];
-        if fitted.is_nan() {
-            raw
-        } else {
-            f64::from(fitted)
-        }
+        f64::from(self.table[raw_bin(raw.clamp(0.0, 1.0))])
     }
 
     /// The table: raw-confidence bin → frequency of collision.

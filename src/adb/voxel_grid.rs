@@ -7,7 +7,7 @@ use crate::mesh::TriMesh;
 /// The grid's origin is moved off the mesh's box by this fraction of a voxel (on top of one
 /// voxel of padding), so that the rays through voxel centres rarely pass exactly through the
 /// vertices or edges of a mesh laid out on a regular grid.
-pub(super) const GRID_SHIFT: f32 = 0.137_036;
+const GRID_SHIFT: f32 = 0.137_036;
 
 /// Voxels this close to a triangle (as a fraction of a voxel, on top of a relative `f32`
 /// rounding margin) count as touched by it: far more than the rounding of a point's transform,
@@ -31,7 +31,7 @@ pub(super) struct VoxelGrid {
 
 impl VoxelGrid {
     /// A grid with no voxels: every point is beyond it.
-    pub const EMPTY: VoxelGrid = VoxelGrid {
+    const EMPTY: VoxelGrid = VoxelGrid {
         origin: Vec3::ZERO,
         cell: 0.0,
         inv_cell: 0.0,
