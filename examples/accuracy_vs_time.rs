@@ -42,8 +42,8 @@ use std::time::{Duration, Instant};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, MAX_SURFACE_SAMPLES, Order,
-    PlanarityEstimator, adb_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, InteriorMap,
+    MAX_SURFACE_SAMPLES, Order, PlanarityEstimator, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects, root_boxes_overlap};
 use stochastic_collision::geometry::Pose;
@@ -472,8 +472,7 @@ fn run_mesh(
                 let answer = if m == 0 || m == methods - 1 {
                     let certified = m > 0
                         && interior.is_some_and(|map| {
-                            map.certify(map, &p.pose).is_some()
-                                || map.certify(map, &p.pose.inverse()).is_some()
+                            InteriorMap::certify_pair(map, map, &p.pose).is_some()
                         });
                     let hit =
                         certified || intersects(cm, &Pose::IDENTITY, cm, &p.pose, &mut exact_ws);

@@ -10,7 +10,7 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use stochastic_collision::adb::{
     APPROXIMATE_INTERIOR_CONFIDENCE, AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace,
-    CERTIFY_CHUNK, InteriorMap, MAX_SURFACE_SAMPLES, adb_intersects,
+    CERTIFY_CHUNK, InteriorMap, MAX_SURFACE_SAMPLES, PairCrossing, adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, contains_point, intersects};
 use stochastic_collision::geometry::Pose;
@@ -157,16 +157,30 @@ fn certificate_is_sound(
     let (mut certified, mut deep) = (0, 0);
     for p in near_contact_poses(a, b, poses, 0.15, 0x1E7) {
         let truth = intersects(a, &Pose::IDENTITY, b, &p.pose, &mut ws);
-        let found = map_b.certify(&map_a, &p.pose).is_some()
+        let one_way = map_b.certify(&map_a, &p.pose).is_some()
             || map_a.certify(&map_b, &p.pose.inverse()).is_some();
+        let pair = InteriorMap::certify_pair(&map_a, &map_b, &p.pose);
+        let offset = p.offset / p.size;
         assert!(
-            !found || truth,
-            "{name}: certified at offset {} without a collision",
-            p.offset / p.size
+            !(one_way || pair.is_some()) || truth,
+            "{name}: certified at offset {offset} without a collision"
         );
-        if p.offset / p.size < -0.03 {
+        // The sample found inside is inside (by exact parity, where the mesh is a closed
+        // manifold: `contains_point` says nothing of other meshes).
+        match pair {
+            Some(PairCrossing::SecondInFirst(c)) if a.is_closed() => {
+                assert!(contains_point(a, c.inside_point), "{name} at {offset}");
+                assert!(c.depth > 0.0);
+            }
+            Some(PairCrossing::FirstInSecond(c)) if b.is_closed() => {
+                assert!(contains_point(b, c.inside_point), "{name} at {offset}");
+                assert!(c.depth > 0.0);
+            }
+            _ => {}
+        }
+        if offset < -0.03 {
             deep += 1;
-            certified += usize::from(found);
+            certified += usize::from(pair.is_some());
         }
     }
     (certified, deep)
@@ -219,6 +233,76 @@ fn the_certificate_is_sound_on_the_shared_meshes() {
         println!("{file}: {certified} of {deep} deep overlaps certified");
         assert!(certified * 2 >= deep, "{file}: {certified} of {deep}");
     }
+}
+
+/// A ball with one vertex pulled out into a long thin spike: closed, its tip one vertex among
+/// thousands, which evenly spread samples almost never include.
+fn spiky_ball() -> (TriMesh, u32) {
+    let ball = generate::icosphere(1.0, 4);
+    let mut positions = ball.positions().to_vec();
+    let tip = (0..positions.len())
+        .max_by(|&i, &j| positions[i].x.total_cmp(&positions[j].x))
+        .expect("vertices");
+    positions[tip] = Vec3::new(2.5, 0.0, 0.0);
+    let mesh = TriMesh::new(positions, ball.triangles().to_vec()).expect("valid mesh");
+    (mesh, tip as u32)
+}
+
+#[test]
+fn the_leading_samples_settle_a_spike_that_the_spread_samples_miss() {
+    let (spiky, tip) = spiky_ball();
+    let spiky = CollisionMesh::new(spiky);
+    let ball = CollisionMesh::new(generate::icosphere(1.0, 3));
+    let (map_spiky, map_ball) = (
+        InteriorMap::build(&spiky, 64, 128),
+        InteriorMap::build(&ball, 64, 128),
+    );
+    assert!(map_spiky.is_exact() && map_ball.is_exact());
+    // The spike's tip 0.3 into the ball, the spiky ball's body well clear of it.
+    let pose = Pose::from_translation(Vec3::new(-3.2, 0.0, 0.0));
+    let mut ws = QueryWorkspace::new();
+    assert!(intersects(&ball, &Pose::IDENTITY, &spiky, &pose, &mut ws));
+    // Only the tip and the spike's shaft near it are inside: evenly spread samples miss them.
+    let inside: Vec<usize> = (0..spiky.mesh().vertex_count())
+        .filter(|&v| contains_point(&ball, pose.transform_point(spiky.mesh().positions()[v])))
+        .collect();
+    assert_eq!(inside, vec![tip as usize]);
+    match InteriorMap::certify_pair(&map_ball, &map_spiky, &pose) {
+        Some(PairCrossing::SecondInFirst(c)) => {
+            assert_eq!(c.vertex, tip);
+            assert!(c.exact && (c.inside_point - Vec3::new(-0.7, 0.0, 0.0)).length() < 1e-4);
+        }
+        other => panic!("the spike's tip is the spiky ball's leading vertex: {other:?}"),
+    }
+    // The other way round, the same crossing, from the first mesh's side.
+    match InteriorMap::certify_pair(&map_spiky, &map_ball, &pose.inverse()) {
+        Some(PairCrossing::FirstInSecond(c)) => assert_eq!(c.vertex, tip),
+        other => panic!("{other:?}"),
+    }
+    // And the ADB query settles it by the certificate.
+    let (tree_ball, tree_spiky) = (AdbTree::new(ball), AdbTree::new(spiky));
+    let out = adb_intersects(
+        &tree_ball,
+        &Pose::IDENTITY,
+        &tree_spiky,
+        &pose,
+        &AdbQuery::default(),
+        &mut AdbWorkspace::new(),
+    );
+    assert!(out.collides && out.interpenetration.is_some_and(|c| c.vertex == tip));
+    // Pulled back so that the tip stops short of the ball: nothing certified.
+    let short = Pose::from_translation(Vec3::new(-3.6, 0.0, 0.0));
+    assert!(!intersects(
+        tree_ball.collision_mesh(),
+        &Pose::IDENTITY,
+        tree_spiky.collision_mesh(),
+        &short,
+        &mut ws
+    ));
+    assert_eq!(
+        InteriorMap::certify_pair(&map_ball, &map_spiky, &short),
+        None
+    );
 }
 
 #[test]
@@ -309,5 +393,9 @@ fn the_certificate_is_deterministic() {
     assert_eq!(m1.classified_voxels(), m2.classified_voxels());
     for p in near_contact_poses(&mesh, &mesh, 30, 0.15, 5) {
         assert_eq!(m1.certify(&m1, &p.pose), m2.certify(&m2, &p.pose));
+        assert_eq!(
+            InteriorMap::certify_pair(&m1, &m1, &p.pose),
+            InteriorMap::certify_pair(&m2, &m2, &p.pose)
+        );
     }
 }

@@ -18,23 +18,35 @@
 //! centre agree. For an open mesh (holes, boundary edges) parity depends on the ray: two of the
 //! three rays decide, and the map is an approximation ([`InteriorMap::is_exact`]).
 //!
-//! The samples are vertices spread over the surface in the BVH's leaf order (so spatially
-//! coherent chunks), each with its connected component: an inside and an outside sample must
-//! belong to one component. A few coarse samples are always looked up; each chunk of them has
-//! finer samples of the same part of the surface, looked up only when a coarse sample of the
-//! chunk came into or near the other mesh, where a deep overlap whose coarse samples missed
-//! the other's inside is found.
-use glam::{DVec3, Mat3, Vec3};
+//! The samples are vertices, each with its connected component (an inside and an outside
+//! sample must belong to one component), of three kinds ([`SurfaceSamples`]):
+//! - per direction (a bin of a cube map), the vertices a mesh leads with when it moves that
+//!   way, and the trailing vertices of the same components: looked up first, towards the other
+//!   mesh, they settle the overlaps of protruding parts (horns, arms, spikes) that evenly
+//!   spread samples seldom hit;
+//! - coarse samples spread over the surface in the BVH's leaf order (so spatially coherent
+//!   chunks), always looked up;
+//! - finer samples of each coarse chunk's part of the surface, looked up only when a coarse
+//!   sample of the chunk came into or near the other mesh.
+//!
+//! A chunk of samples whose bounding sphere lies wholly outside the other mesh (or wholly
+//! inside it) is settled by one lookup in the map's [`Clearance`] (per block of voxels, the
+//! distance to the nearest voxel not wholly outside, and to the nearest not wholly inside), so
+//! a pose short of contact looks up only the few chunks that come near the other mesh.
+use glam::{DVec3, Vec3};
 
+use super::clearance::Clearance;
+use super::sample_lookup::Lookup;
+use super::surface_samples::SurfaceSamples;
 use super::voxel_grid::VoxelGrid;
-use crate::bvh::{CollisionMesh, component_labels};
+use crate::bvh::CollisionMesh;
 use crate::geometry::Pose;
 use crate::mesh::Topology;
 
 /// Class of a voxel in an [`InteriorMap`]: a triangle comes near it.
 const SURFACE: u8 = 0;
 /// Class of a voxel wholly outside.
-const OUTSIDE: u8 = 1;
+pub(super) const OUTSIDE: u8 = 1;
 /// Class of a voxel wholly inside.
 const INSIDE: u8 = 2;
 /// Class of a voxel no triangle comes near whose three rays disagree (an open mesh, seen
@@ -43,15 +55,6 @@ const AMBIGUOUS: u8 = 3;
 
 /// Most coarse surface samples an [`InteriorMap`] keeps (in at most 64 chunks).
 pub const MAX_SURFACE_SAMPLES: usize = 64 * CERTIFY_CHUNK;
-
-/// The component rank of samples whose component is not among the 63 largest: such samples
-/// never certify (components are tracked in a `u64`).
-const NO_COMPONENT: u8 = 63;
-
-/// Finer samples per coarse chunk, looked up only where the coarse samples came into or near
-/// the other mesh ([`InteriorMap::look_up`]): deep overlaps whose coarse samples straddle the
-/// other surface without one inside it get a denser look there.
-const REFINEMENT: usize = 64;
 
 /// Voxels searched in each direction for [`Interpenetration::depth`].
 const DEPTH_SEARCH_VOXELS: u32 = 64;
@@ -78,34 +81,17 @@ pub const CERTIFY_CHUNK: usize = 8;
 /// ```
 #[derive(Debug, Clone)]
 pub struct InteriorMap {
-    grid: VoxelGrid,
+    pub(super) grid: VoxelGrid,
     /// The class of every voxel, 2 bits each, four to a byte (x fastest, then y, then z), so
     /// that a map of a million voxels takes a quarter of a megabyte and stays in cache.
-    classes: Vec<u8>,
+    pub(super) classes: Vec<u8>,
     /// Voxels in the map.
     voxels: usize,
-    exact: bool,
-    samples: SurfaceSamples,
-}
-
-/// Points on a mesh's surface, spread over it (with their connected components), in
-/// structure-of-arrays form, padded to whole chunks by repeating the last sample: the coarse
-/// samples, then per coarse chunk the finer samples of the same part of the surface.
-#[derive(Debug, Clone, Default)]
-struct SurfaceSamples {
-    x: Vec<f32>,
-    y: Vec<f32>,
-    z: Vec<f32>,
-    /// Per sample, the vertex it is.
-    vertex: Vec<u32>,
-    /// Per sample, the size rank of its connected component (below [`NO_COMPONENT`]), or
-    /// [`NO_COMPONENT`].
-    component: Vec<u8>,
-    /// Per chunk of [`CERTIFY_CHUNK`] samples, a sphere around them (centre, radius).
-    chunk_spheres: Vec<(Vec3, f32)>,
-    /// The coarse samples' chunks (the first ones); the refinement of coarse chunk `c` is the
-    /// [`REFINEMENT`] samples after them at `coarse_chunks + c · REFINEMENT / CERTIFY_CHUNK`.
-    coarse_chunks: usize,
+    pub(super) exact: bool,
+    pub(super) samples: SurfaceSamples,
+    /// How far each block of voxels is from the nearest voxel not wholly outside, and from the
+    /// nearest not wholly inside.
+    pub(super) clearance: Clearance,
 }
 
 /// What [`InteriorMap::certify`] found: a sample of one surface inside the other mesh (and one
@@ -146,7 +132,7 @@ impl InteriorMap {
         let topology = Topology::new(tri_mesh);
         let exact = !topology.edges().is_empty()
             && topology.edges().iter().all(|e| e.triangles.len() % 2 == 0);
-        let samples = surface_samples(mesh, samples.min(MAX_SURFACE_SAMPLES));
+        let samples = SurfaceSamples::build(mesh, samples.min(MAX_SURFACE_SAMPLES));
         let grid = VoxelGrid::around(tri_mesh, resolution);
         let voxels = grid.voxels();
         let mut map = Self {
@@ -155,6 +141,7 @@ impl InteriorMap {
             voxels,
             exact: exact && voxels > 0,
             samples,
+            clearance: Clearance::default(),
         };
         let surface = grid.surface_voxels(tri_mesh);
         // Odd parity along each axis, one bit per axis.
@@ -178,6 +165,11 @@ impl InteriorMap {
             };
             map.classes[i / 4] |= class << (2 * (i % 4));
         }
+        map.clearance = Clearance::build(grid.dims, |i| match map.class(i) {
+            OUTSIDE => Some(false),
+            INSIDE => Some(true),
+            _ => None,
+        });
         map
     }
 
@@ -213,6 +205,9 @@ impl InteriorMap {
                 * std::mem::size_of::<f32>()
             + self.samples.vertex.capacity() * std::mem::size_of::<u32>()
             + self.samples.chunk_spheres.capacity() * std::mem::size_of::<(Vec3, f32)>()
+            + self.samples.chunk_components.capacity() * std::mem::size_of::<u64>()
+            + self.samples.component.capacity()
+            + self.clearance.memory_bytes()
     }
 
     /// `Some(true)` if `p` (in the mesh's frame) lies in a voxel classified inside,
@@ -239,7 +234,7 @@ impl InteriorMap {
 
     /// The class of voxel `i`.
     #[inline]
-    fn class(&self, i: usize) -> u8 {
+    pub(super) fn class(&self, i: usize) -> u8 {
         (self.classes[i / 4] >> (2 * (i % 4))) & 0b11
     }
 
@@ -256,144 +251,96 @@ impl InteriorMap {
 
     /// [`InteriorMap::certify`], and when it finds nothing, whether no sample came into or near
     /// `other` (then the surfaces are apart where the samples are, and looking the other way
-    /// round is unlikely to find a crossing).
+    /// round is unlikely to find a crossing). The samples that lead towards `other` (from this
+    /// mesh's box centre to `other`'s) are looked up first, then the ones spread over the
+    /// surface, then finer ones where those came into or near `other`.
     pub fn look_up(&self, other: &InteriorMap, to_other: &Pose) -> SampleLookup {
-        if other.classes.is_empty() || self.samples.x.is_empty() || !to_other.is_finite() {
+        let Some(mut lookup) = Lookup::new(self, other, to_other) else {
             return SampleLookup::Undecided;
-        }
-        // The transform and the voxel lookup in one affine map, to voxel coordinates.
-        let grid = &other.grid;
-        let m = Mat3::from_quat(to_other.rotation) * grid.inv_cell;
-        let t = (to_other.translation - grid.origin) * grid.inv_cell;
-        let map = VoxelMap {
-            rows: [m.row(0), m.row(1), m.row(2)],
-            translation: t,
-            dims: grid.dims.map(|d| d as f32),
         };
-        let samples = &self.samples;
-        // A chunk's voxel indices and on-map mask (`None`: its sphere lies beyond the map, so
-        // all of it is outside), the bytes it will read prefetched: computed one chunk ahead,
-        // so that the lookups of one chunk overlap the cache misses of the next.
-        let prepare = |chunk: usize| {
-            let (centre, radius) = samples.chunk_spheres[chunk];
-            let q = m * centre + t;
-            let r = radius * grid.inv_cell;
-            if (0..3).any(|i| q[i] + r < 0.0 || q[i] - r > map.dims[i]) {
-                return None;
-            }
-            let range = chunk * CERTIFY_CHUNK..(chunk + 1) * CERTIFY_CHUNK;
-            // Branch-free (vectorised where the target allows): where a sample lands does not
-            // predict well.
-            let (index, on_map) = map.voxel_indices(
-                [&samples.x, &samples.y, &samples.z]
-                    .map(|c| <&Chunk>::try_from(&c[range.clone()]).expect("whole chunks")),
-            );
-            for &i in &index {
-                prefetch(&other.classes[i as usize / 4]);
-            }
-            Some((index, on_map))
-        };
-        // Per component rank, whether a sample of it was seen inside, outside.
-        let (mut inside_seen, mut outside_seen) = (0u64, 0u64);
-        // Per component rank, the first sample of it seen inside (for the witness).
-        let mut first_inside = [u16::MAX; 64];
-        // Scans `chunks`, one ahead: `Some(sample)` (the first seen inside of its component)
-        // once a sample of one component was seen inside and one outside, over all scans; sets
-        // bit `c % 64` of `touched` for each chunk `c` with a sample inside or near the other
-        // surface.
-        let mut scan = |chunks: std::ops::Range<usize>, touched: &mut u64| {
-            let mut next = prepare(chunks.start);
-            for chunk in chunks.clone() {
-                let current = next;
-                if chunk + 1 < chunks.end {
-                    next = prepare(chunk + 1);
-                }
-                let Some((index, on_map)) = current else {
-                    for &c in &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK] {
-                        outside_seen |= 1 << c;
-                    }
-                    continue;
-                };
-                // The chunk's classes, 2 bits per sample, those off the map outside; then the
-                // samples inside and outside as bit masks, without a branch per sample.
-                let mut classes = 0u32;
-                for (k, &index) in index.iter().enumerate() {
-                    classes |= u32::from(other.class(index as usize)) << (2 * k);
-                }
-                let off_map = spread_bits(!on_map & ((1 << CERTIFY_CHUNK) - 1));
-                classes = (classes & !(off_map * 0b11)) | (off_map * u32::from(OUTSIDE));
-                let inside = (classes >> 1) & !classes & EVEN_BITS;
-                let outside_here = classes & !(classes >> 1) & EVEN_BITS;
-                let components = &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK];
-                for (k, &c) in components.iter().enumerate() {
-                    let is_inside = (inside >> (2 * k)) & 1;
-                    if is_inside != 0 && first_inside[usize::from(c)] == u16::MAX {
-                        first_inside[usize::from(c)] = (chunk * CERTIFY_CHUNK + k) as u16;
-                    }
-                    inside_seen |= u64::from(is_inside) << c;
-                    outside_seen |= u64::from((outside_here >> (2 * k)) & 1) << c;
-                }
-                // Inside or near the other surface (class 0 or 2: bit 0 clear); a voxel where
-                // the rays disagree says nothing of where the surface is.
-                if !classes & EVEN_BITS != 0 {
-                    *touched |= 1 << (chunk % 64);
-                }
-                let crossing = inside_seen & outside_seen & !(1 << NO_COMPONENT);
-                if crossing != 0 {
-                    return Some(usize::from(
-                        first_inside[crossing.trailing_zeros() as usize],
-                    ));
-                }
-            }
-            None
-        };
-        let coarse = samples.coarse_chunks;
-        let per_chunk = REFINEMENT / CERTIFY_CHUNK;
-        let mut touched = 0u64;
-        let mut found = scan(0..coarse, &mut touched);
-        // Refine where the coarse samples came into or near the other mesh (the coarse
-        // chunks are at most 64: a mesh's samples are at most MAX_SURFACE_SAMPLES).
-        let mut refined = 0u64;
-        let mut left = touched;
-        while found.is_none() && left != 0 {
-            let c = left.trailing_zeros() as usize;
-            left &= left - 1;
-            let first = coarse + c * per_chunk;
-            found = scan(first..first + per_chunk, &mut refined);
-        }
-        match found {
-            Some(j) => {
-                let p =
-                    to_other.transform_point(Vec3::new(samples.x[j], samples.y[j], samples.z[j]));
-                SampleLookup::Crossing(Interpenetration {
-                    inside_point: p,
-                    vertex: samples.vertex[j],
-                    exact: other.exact,
-                    depth: other.depth_inside(p),
-                })
-            }
-            None if touched == 0 => SampleLookup::AllOutside,
+        match lookup.support().or_else(|| lookup.spread()) {
+            Some(j) => SampleLookup::Crossing(lookup.crossing(j)),
+            None if !lookup.touched => SampleLookup::AllOutside,
             None => SampleLookup::Undecided,
         }
+    }
+
+    /// The certificate both ways between two meshes, `second_to_first` taking the second
+    /// mesh's frame to the first's: the samples each mesh leads with towards the other first
+    /// (where a collision begins and goes deepest), then the second mesh's samples spread over
+    /// its surface in the first's map, then, unless every one of those lay outside the first
+    /// mesh and away from its surface (a pose short of contact, almost always), the first's in
+    /// the second's. `None` if no sample pair shows a crossing.
+    ///
+    /// # Example
+    /// ```
+    /// use stochastic_collision::prelude::*;
+    /// use stochastic_collision::adb::{InteriorMap, PairCrossing};
+    /// let ball = CollisionMesh::new(generate::icosphere(1.0, 3));
+    /// let map = InteriorMap::build(&ball, 32, 64);
+    /// let deep = Pose::from_translation(Vec3::new(1.2, 0.0, 0.0));
+    /// assert!(matches!(
+    ///     InteriorMap::certify_pair(&map, &map, &deep),
+    ///     Some(PairCrossing::SecondInFirst(_) | PairCrossing::FirstInSecond(_))
+    /// ));
+    /// let apart = Pose::from_translation(Vec3::new(2.5, 0.0, 0.0));
+    /// assert_eq!(InteriorMap::certify_pair(&map, &map, &apart), None);
+    /// ```
+    pub fn certify_pair(
+        first: &InteriorMap,
+        second: &InteriorMap,
+        second_to_first: &Pose,
+    ) -> Option<PairCrossing> {
+        let mut second_in_first = Lookup::new(second, first, second_to_first);
+        let mut first_in_second = Lookup::new(first, second, &second_to_first.inverse());
+        let found_in_first = |l: &Lookup<'_>, j| PairCrossing::SecondInFirst(l.crossing(j));
+        let found_in_second = |l: &Lookup<'_>, j| PairCrossing::FirstInSecond(l.crossing(j));
+        if let Some(l) = &mut second_in_first
+            && let Some(j) = l.support()
+        {
+            return Some(found_in_first(l, j));
+        }
+        if let Some(l) = &mut first_in_second
+            && let Some(j) = l.support()
+        {
+            return Some(found_in_second(l, j));
+        }
+        if let Some(l) = &mut second_in_first
+            && let Some(j) = l.spread()
+        {
+            return Some(found_in_first(l, j));
+        }
+        if second_in_first.as_ref().is_some_and(|l| !l.touched) {
+            // Every spread sample of the second mesh lay outside the first: a pose short of
+            // contact, almost always.
+            return None;
+        }
+        let l = first_in_second.as_mut()?;
+        l.spread().map(|j| found_in_second(l, j))
     }
 
     /// How far `p` (in this mesh's frame, in a voxel classified inside) is from the first voxel
     /// along one of the six axis directions that is not classified inside, from the centre of
     /// its voxel: at least half a voxel, at most [`DEPTH_SEARCH_VOXELS`] voxels.
-    fn depth_inside(&self, p: Vec3) -> f32 {
+    pub(super) fn depth_inside(&self, p: Vec3) -> f32 {
         let grid = &self.grid;
-        let q = ((p - grid.origin) * grid.inv_cell).floor();
-        let steps = (1..=DEPTH_SEARCH_VOXELS)
-            .find(|&k| {
-                let k = k as f32;
-                [Vec3::X, Vec3::Y, Vec3::Z].iter().any(|&axis| {
-                    [k, -k].iter().any(|&s| {
-                        let c = q + axis * s + 0.5;
-                        self.class_at(grid.origin + c * grid.cell) != INSIDE
-                    })
-                })
-            })
-            .unwrap_or(DEPTH_SEARCH_VOXELS);
+        let q = (p - grid.origin) * grid.inv_cell;
+        let dims = grid.dims.map(i64::from);
+        let at = [q.x, q.y, q.z].map(|c| c.floor() as i64);
+        if (0..3).any(|i| !(0..dims[i]).contains(&at[i])) {
+            return 0.5 * grid.cell;
+        }
+        let stride = [1, dims[0], dims[0] * dims[1]];
+        let from = at[0] + at[1] * stride[1] + at[2] * stride[2];
+        // Whether the voxel `k` steps from `at` along `axis` (either way: the sign of `k`) is
+        // on the map and inside.
+        let inside = |axis: usize, k: i64| {
+            (0..dims[axis]).contains(&(at[axis] + k))
+                && self.class((from + k * stride[axis]) as usize) == INSIDE
+        };
+        let steps = (1..=i64::from(DEPTH_SEARCH_VOXELS))
+            .find(|&k| (0..3).any(|axis| !inside(axis, k) || !inside(axis, -k)))
+            .unwrap_or(i64::from(DEPTH_SEARCH_VOXELS));
         (steps as f32 - 0.5) * grid.cell
     }
 
@@ -477,251 +424,15 @@ impl InteriorMap {
     }
 }
 
-/// One chunk of sample coordinates.
-type Chunk = [f32; CERTIFY_CHUNK];
-
-/// A map from a mesh's frame to voxel coordinates of another mesh's [`InteriorMap`].
-struct VoxelMap {
-    rows: [Vec3; 3],
-    translation: Vec3,
-    dims: [f32; 3],
-}
-
-impl VoxelMap {
-    /// The voxel index of each of [`CERTIFY_CHUNK`] points (computed in `f32`: exact below
-    /// 2^24 voxels) and a bit mask of those that lie on the map (the others' indices are those
-    /// of the nearest voxel, never out of range).
-    #[inline]
-    fn voxel_indices(&self, [xs, ys, zs]: [&Chunk; 3]) -> ([i32; CERTIFY_CHUNK], u32) {
-        #[cfg(target_arch = "x86_64")]
-        {
-            self.voxel_indices_sse2([xs, ys, zs])
-        }
-        #[cfg(not(target_arch = "x86_64"))]
-        {
-            self.voxel_indices_scalar([xs, ys, zs])
-        }
-    }
-
-    /// [`VoxelMap::voxel_indices`] one point at a time: the same IEEE operations in the same
-    /// order as the vectorised form, so the same results.
-    #[cfg_attr(target_arch = "x86_64", allow(dead_code))]
-    fn voxel_indices_scalar(&self, [xs, ys, zs]: [&Chunk; 3]) -> ([i32; CERTIFY_CHUNK], u32) {
-        let (mut index, mut on_map) = ([0i32; CERTIFY_CHUNK], 0u32);
-        let [dx, dy, _] = self.dims;
-        for k in 0..CERTIFY_CHUNK {
-            let coordinate = |r: Vec3| r.x * xs[k] + r.y * ys[k] + r.z * zs[k];
-            let q = [
-                coordinate(self.rows[0]) + self.translation.x,
-                coordinate(self.rows[1]) + self.translation.y,
-                coordinate(self.rows[2]) + self.translation.z,
-            ];
-            let within = (0..3).all(|i| q[i] >= 0.0 && q[i] < self.dims[i]);
-            on_map |= u32::from(within) << k;
-            let c = [0, 1, 2].map(|i| (q[i].max(0.0).min(self.dims[i] - 1.0) as i32) as f32);
-            index[k] = (c[0] + c[1] * dx + c[2] * (dx * dy)) as i32;
-        }
-        (index, on_map)
-    }
-
-    /// [`VoxelMap::voxel_indices`] four points at a time (SSE2, always there on x86_64).
-    #[cfg(target_arch = "x86_64")]
-    #[inline]
-    fn voxel_indices_sse2(&self, [xs, ys, zs]: [&Chunk; 3]) -> ([i32; CERTIFY_CHUNK], u32) {
-        use std::arch::x86_64::*;
-        let (mut index, mut on_map) = ([0i32; CERTIFY_CHUNK], 0u32);
-        // SAFETY: SSE2 is part of the x86_64 baseline; the loads and stores are unaligned
-        // ones of four f32/i32 within the arrays (CERTIFY_CHUNK is a multiple of 4).
-        unsafe {
-            let splat = |v: f32| _mm_set1_ps(v);
-            let zero = _mm_setzero_ps();
-            let dims = self.dims.map(splat);
-            let last = self.dims.map(|d| splat(d - 1.0));
-            let (dx, dxy) = (splat(self.dims[0]), splat(self.dims[0] * self.dims[1]));
-            for lane in (0..CERTIFY_CHUNK).step_by(4) {
-                let x = _mm_loadu_ps(xs.as_ptr().add(lane));
-                let y = _mm_loadu_ps(ys.as_ptr().add(lane));
-                let z = _mm_loadu_ps(zs.as_ptr().add(lane));
-                let mut within = _mm_castsi128_ps(_mm_set1_epi32(-1));
-                let mut c = [zero; 3];
-                for i in 0..3 {
-                    let r = self.rows[i];
-                    let q = _mm_add_ps(
-                        _mm_add_ps(
-                            _mm_add_ps(_mm_mul_ps(splat(r.x), x), _mm_mul_ps(splat(r.y), y)),
-                            _mm_mul_ps(splat(r.z), z),
-                        ),
-                        splat(self.translation[i]),
-                    );
-                    within = _mm_and_ps(within, _mm_cmpge_ps(q, zero));
-                    within = _mm_and_ps(within, _mm_cmplt_ps(q, dims[i]));
-                    let clamped = _mm_min_ps(_mm_max_ps(q, zero), last[i]);
-                    c[i] = _mm_cvtepi32_ps(_mm_cvttps_epi32(clamped));
-                }
-                let flat = _mm_add_ps(
-                    _mm_add_ps(c[0], _mm_mul_ps(c[1], dx)),
-                    _mm_mul_ps(c[2], dxy),
-                );
-                _mm_storeu_si128(index.as_mut_ptr().add(lane).cast(), _mm_cvttps_epi32(flat));
-                on_map |= (_mm_movemask_ps(within) as u32) << lane;
-            }
-        }
-        (index, on_map)
-    }
-}
-
-/// Asks the CPU to bring `byte` into the cache (a hint: no effect on the result; nothing on
-/// targets without the instruction).
-#[inline(always)]
-fn prefetch(byte: &u8) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch never faults and reads nothing the program sees; SSE is part of the
-    // x86_64 baseline.
-    unsafe {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>(std::ptr::from_ref(byte).cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = byte;
-}
-
-/// The even bits of a chunk's 2-bit classes (one per sample).
-const EVEN_BITS: u32 = 0x5555;
-
-/// Moves bit `k` of an 8-bit mask to bit `2k`.
-#[inline]
-fn spread_bits(mask: u32) -> u32 {
-    let x = (mask | (mask << 4)) & 0x0F0F;
-    let x = (x | (x << 2)) & 0x3333;
-    (x | (x << 1)) & EVEN_BITS
+/// Which mesh's sample [`InteriorMap::certify_pair`] found inside the other.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PairCrossing {
+    /// A sample of the second mesh inside the first (its point in the first mesh's frame).
+    SecondInFirst(Interpenetration),
+    /// A sample of the first mesh inside the second (its point in the second mesh's frame).
+    FirstInSecond(Interpenetration),
 }
 
 fn min_max(x: [f64; 3]) -> (f64, f64) {
     (x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
-}
-
-/// Up to `count` vertices of the largest connected component (by triangles), spread over it:
-/// one per equal share of the component's triangles in the BVH's leaf order (spatially
-/// coherent, so the samples cover the surface), padded to whole chunks.
-fn surface_samples(mesh: &CollisionMesh, count: usize) -> SurfaceSamples {
-    let triangles = mesh.mesh().triangles();
-    let positions = mesh.mesh().positions();
-    let mut samples = SurfaceSamples::default();
-    if triangles.is_empty() || count == 0 {
-        return samples;
-    }
-    // Components ranked by size (0 the largest; the ones beyond the 63 largest share rank 63,
-    // which never certifies).
-    let labels = component_labels(mesh.mesh());
-    let mut sizes = std::collections::HashMap::<u32, usize>::new();
-    for tri in triangles {
-        *sizes.entry(labels[tri[0] as usize]).or_default() += 1;
-    }
-    let mut ranked: Vec<(usize, u32)> = sizes.iter().map(|(&label, &n)| (n, label)).collect();
-    ranked.sort_by_key(|&(n, label)| (std::cmp::Reverse(n), label));
-    let rank: std::collections::HashMap<u32, u8> = ranked
-        .iter()
-        .enumerate()
-        .map(|(i, &(_, label))| (label, i.min(usize::from(NO_COMPONENT)) as u8))
-        .collect();
-    let order = mesh.bvh().leaf_triangles();
-    let count = count.min(order.len());
-    let mut push = |position: usize| {
-        let vertex = triangles[order[position] as usize][0];
-        let p = positions[vertex as usize];
-        samples.x.push(p.x);
-        samples.y.push(p.y);
-        samples.z.push(p.z);
-        samples.vertex.push(vertex);
-        samples.component.push(rank[&labels[vertex as usize]]);
-    };
-    // The coarse samples: one per equal share of the leaf order, padded to whole chunks.
-    let coarse = count.next_multiple_of(CERTIFY_CHUNK);
-    for j in 0..coarse {
-        push((j.min(count - 1) * order.len() + order.len() / 2) / count);
-    }
-    // The refinement of each coarse chunk: REFINEMENT samples spread over the share of the
-    // leaf order its samples stand for.
-    let share = |c: usize| (c * CERTIFY_CHUNK).min(count) * order.len() / count;
-    for c in 0..coarse / CERTIFY_CHUNK {
-        let (from, to) = (share(c), share(c + 1).max(share(c) + 1).min(order.len()));
-        for j in 0..REFINEMENT {
-            push(from + (j * (to - from) + (to - from) / 2) / REFINEMENT);
-        }
-    }
-    samples.coarse_chunks = coarse / CERTIFY_CHUNK;
-    samples.chunk_spheres = (0..samples.x.len())
-        .step_by(CERTIFY_CHUNK)
-        .map(|start| {
-            let points: Vec<Vec3> = (start..start + CERTIFY_CHUNK)
-                .map(|j| Vec3::new(samples.x[j], samples.y[j], samples.z[j]))
-                .collect();
-            let (lo, hi) = points.iter().fold((points[0], points[0]), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-            let centre = (lo + hi) * 0.5;
-            let radius = points
-                .iter()
-                .map(|p| p.distance(centre))
-                .fold(0.0, f32::max);
-            // Grown a little: the radius must hold the samples whatever the rounding.
-            (
-                centre,
-                radius * (1.0 + 1e-4) + 1e-6 * centre.abs().max_element(),
-            )
-        })
-        .collect();
-    samples
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use rand::rngs::Xoshiro256PlusPlus;
-    use rand::{RngExt, SeedableRng};
-
-    /// The vectorised voxel indices are those of the scalar form, to the bit, on points on,
-    /// beside and far off the map (negative coordinates, huge ones, the map's faces).
-    #[test]
-    #[cfg(target_arch = "x86_64")]
-    fn vectorised_voxel_indices_equal_the_scalar_ones() {
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
-        for _ in 0..200 {
-            let rotation = glam::Quat::from_euler(
-                glam::EulerRot::XYZ,
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-                rng.random_range(-3.0..3.0),
-            );
-            let scale = rng.random_range(0.5f32..50.0);
-            let m = Mat3::from_quat(rotation) * scale;
-            let map = VoxelMap {
-                rows: [m.row(0), m.row(1), m.row(2)],
-                translation: Vec3::new(
-                    rng.random_range(-20.0..20.0),
-                    rng.random_range(-20.0..20.0),
-                    rng.random_range(-20.0..20.0),
-                ),
-                dims: [
-                    rng.random_range(3..200) as f32,
-                    rng.random_range(3..200) as f32,
-                    rng.random_range(3..200) as f32,
-                ],
-            };
-            let mut coordinate = || match rng.random_range(0..8) {
-                0 => 0.0,
-                1 => -1e30,
-                2 => 1e30,
-                3 => rng.random_range(-1.0f32..1.0) * 1e-6,
-                _ => rng.random_range(-5.0f32..5.0),
-            };
-            let xs: [f32; CERTIFY_CHUNK] = std::array::from_fn(|_| coordinate());
-            let ys: [f32; CERTIFY_CHUNK] = std::array::from_fn(|_| coordinate());
-            let zs: [f32; CERTIFY_CHUNK] = std::array::from_fn(|_| coordinate());
-            let scalar = map.voxel_indices_scalar([&xs, &ys, &zs]);
-            assert_eq!(map.voxel_indices_sse2([&xs, &ys, &zs]), scalar);
-            let voxels = map.dims.iter().product::<f32>() as i32;
-            assert!(scalar.0.iter().all(|&i| (0..voxels).contains(&i)));
-        }
-    }
 }

@@ -16,16 +16,20 @@
 //!   confidence, whether the budget ran out, and where the contact probably is.
 
 pub mod cells;
+mod clearance;
 mod confidence_fit;
 mod estimator;
 mod fit;
 mod interior;
 pub mod probability;
 mod queue;
+mod sample_lookup;
+mod surface_samples;
 pub mod tables;
 mod traverse;
 mod tree;
 mod voxel_grid;
+mod voxel_map;
 
 pub use confidence_fit::ConfidenceCalibration;
 pub use estimator::{
@@ -34,7 +38,7 @@ pub use estimator::{
 };
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
 pub use interior::{
-    CERTIFY_CHUNK, InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, SampleLookup,
+    CERTIFY_CHUNK, InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, SampleLookup,
 };
 pub use traverse::{
     APPROXIMATE_INTERIOR_CONFIDENCE, AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness,

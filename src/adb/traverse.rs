@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
-use super::interior::{Interpenetration, SampleLookup};
+use super::interior::{InteriorMap, Interpenetration, PairCrossing};
 use super::queue::{Entry, Queue};
 use super::tree::{AdbTree, nodes_overlap, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
@@ -100,9 +100,10 @@ pub struct AdbQuery {
     /// confidence 0 never says "collision".
     pub collide_at: f64,
     /// After how many queue pops without an answer the traversal tries the interpenetration
-    /// certificate, once ([`InteriorMap::look_up`](super::InteriorMap::look_up): the second
-    /// mesh's surface samples in the first mesh's map, then the other way round unless every
-    /// sample lay outside): a surface sample of one mesh inside the other and one of the same
+    /// certificate, once ([`InteriorMap::certify_pair`](super::InteriorMap::certify_pair): the
+    /// samples each mesh leads with towards the other, then the second mesh's spread samples
+    /// in the first mesh's map, then the other way round unless every one lay outside): a
+    /// surface sample of one mesh inside the other and one of the same
     /// connected surface outside it prove that the surfaces cross, so the query ends with
     /// "collision" there. `None` never tries it; neither does a query between trees built
     /// without an [`InteriorMap`](super::InteriorMap). With a map that is not
@@ -351,7 +352,8 @@ pub fn adb_intersects(
     query: &AdbQuery,
     ws: &mut AdbWorkspace,
 ) -> AdbOutcome {
-    let start = Instant::now();
+    // The clock is read only for a time budget.
+    let start = matches!(query.budget, Budget::Time(_)).then(Instant::now);
     let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
     let (na, nb) = (ma.bvh().nodes(), mb.bvh().nodes());
     let rel = pose_a.inverse_mul(pose_b);
@@ -459,13 +461,10 @@ pub fn adb_intersects(
             return false;
         };
         interior_failed = true;
-        // The second mesh's samples in the first's map; the other way round only when some
-        // sample came near or into the first mesh (when all lay outside it, the first mesh's
-        // samples would almost never find a crossing: a pose short of contact).
-        let found = match map_b.look_up(map_a, &rel) {
-            SampleLookup::Crossing(c) => Some((c, pose_a)),
-            SampleLookup::AllOutside => None,
-            SampleLookup::Undecided => map_a.certify(map_b, &rel.inverse()).map(|c| (c, pose_b)),
+        let found = match InteriorMap::certify_pair(map_a, map_b, &rel) {
+            Some(PairCrossing::SecondInFirst(c)) => Some((c, pose_a)),
+            Some(PairCrossing::FirstInSecond(c)) => Some((c, pose_b)),
+            None => None,
         };
         let Some((cert, frame_pose)) = found else {
             return false;
@@ -542,7 +541,7 @@ pub fn adb_intersects(
                 Budget::Time(t) => {
                     unclocked >= TIME_CHECK_INTERVAL && {
                         unclocked = 0;
-                        start.elapsed() >= t
+                        start.is_some_and(|s| s.elapsed() >= t)
                     }
                 }
             };

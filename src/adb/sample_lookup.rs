@@ -1,0 +1,276 @@
+//! One mesh's surface samples looked up in another mesh's [`InteriorMap`]: the work of the
+//! interpenetration certificate ([`InteriorMap::certify_pair`], [`InteriorMap::look_up`]).
+use glam::{Mat3, Vec3};
+
+use super::interior::{CERTIFY_CHUNK, InteriorMap, Interpenetration, OUTSIDE};
+use super::surface_samples::{NO_COMPONENT, REFINEMENT, SurfaceSamples};
+use super::voxel_map::{Chunk, VoxelMap};
+use crate::geometry::Pose;
+
+/// One mesh's samples being looked up in another mesh's map, and what they showed so far.
+pub(super) struct Lookup<'a> {
+    samples: &'a SurfaceSamples,
+    other: &'a InteriorMap,
+    /// The samples' frame to the other's.
+    to_other: Pose,
+    /// The samples' frame to the other map's voxel coordinates.
+    map: VoxelMap,
+    /// Per component rank, whether a sample of it was seen inside, outside.
+    inside_seen: u64,
+    outside_seen: u64,
+    /// Per component rank, the first sample of it seen inside (for the witness).
+    first_inside: [u16; 64],
+    /// Whether a spread sample (not a support one) came inside or near the other surface.
+    pub(super) touched: bool,
+}
+
+impl<'a> Lookup<'a> {
+    /// `None` when there is nothing to look up: an empty map, no samples, a pose that is not
+    /// finite.
+    pub(super) fn new(
+        this: &'a InteriorMap,
+        other: &'a InteriorMap,
+        to_other: &Pose,
+    ) -> Option<Self> {
+        if other.classes.is_empty() || this.samples.x.is_empty() || !to_other.is_finite() {
+            return None;
+        }
+        // The transform and the voxel lookup in one affine map, to voxel coordinates.
+        let grid = &other.grid;
+        let m = Mat3::from_quat(to_other.rotation) * grid.inv_cell;
+        Some(Self {
+            samples: &this.samples,
+            other,
+            to_other: *to_other,
+            map: VoxelMap::new(
+                [m.row(0), m.row(1), m.row(2)],
+                (to_other.translation - grid.origin) * grid.inv_cell,
+                grid.dims.map(|d| d as f32),
+            ),
+            inside_seen: 0,
+            outside_seen: 0,
+            first_inside: [u16::MAX; 64],
+            touched: false,
+        })
+    }
+
+    /// Looks the support chunk up: the samples that lead towards the other mesh (from this
+    /// mesh's box centre to the other's).
+    pub(super) fn support(&mut self) -> Option<usize> {
+        let towards = self
+            .to_other
+            .inverse()
+            .transform_point(self.other.samples.centre)
+            - self.samples.centre;
+        let leading = self.samples.support_chunk(towards)?;
+        // Leading samples come near the other surface on every pose close to contact: whether
+        // one did says nothing of whether the spread samples will find a crossing.
+        let touched = self.touched;
+        let mut found = self.scan(leading..leading + 1, &mut 0);
+        if found.is_none() && self.inside_seen & !self.outside_seen != 0 {
+            // A leading sample inside: the trailing ones of the same components are the
+            // likeliest outside.
+            found = self.scan(leading + 1..leading + 2, &mut 0);
+        }
+        self.touched = touched;
+        found
+    }
+
+    /// Looks the coarse samples up, then the refinement of every coarse chunk that came into
+    /// or near the other mesh.
+    pub(super) fn spread(&mut self) -> Option<usize> {
+        let coarse = self.samples.coarse_chunks;
+        let per_chunk = REFINEMENT / CERTIFY_CHUNK;
+        let mut touched = 0u64;
+        if let Some(j) = self.scan(0..coarse, &mut touched) {
+            return Some(j);
+        }
+        // The coarse chunks are at most 64: a mesh's samples are at most MAX_SURFACE_SAMPLES.
+        let mut left = touched;
+        while left != 0 {
+            let c = left.trailing_zeros() as usize;
+            left &= left - 1;
+            let first = coarse + c * per_chunk;
+            if let Some(j) = self.scan(first..first + per_chunk, &mut 0) {
+                return Some(j);
+            }
+        }
+        None
+    }
+
+    /// A chunk's voxel indices and on-map mask, the bytes it will read prefetched.
+    #[inline]
+    fn prepare(&self, chunk: usize) -> ([i32; CERTIFY_CHUNK], u32) {
+        let samples = self.samples;
+        let range = chunk * CERTIFY_CHUNK..(chunk + 1) * CERTIFY_CHUNK;
+        // Branch-free (vectorised where the target allows): where a sample lands does not
+        // predict well.
+        let (index, on_map) = self.map.voxel_indices(
+            [&samples.x, &samples.y, &samples.z]
+                .map(|c| <&Chunk>::try_from(&c[range.clone()]).expect("whole chunks")),
+        );
+        for &i in &index {
+            prefetch(self.other.classes.as_ptr().wrapping_add(i as usize / 4));
+        }
+        (index, on_map)
+    }
+
+    /// Scans `chunks` (at most 64): first every chunk whose sphere lies beyond the other map
+    /// or wholly outside or inside the other mesh (all its samples on that side, from one
+    /// test), then the others' samples one by one, preparing one chunk ahead (so that the
+    /// lookups of one chunk overlap the cache misses of the next). `Some(sample)` (the first
+    /// seen inside of its component) once a sample of one component was seen inside and one
+    /// outside, over all scans; sets bit `c % 64` of `touched` for each chunk `c` with a
+    /// sample inside or near the other surface.
+    fn scan(&mut self, chunks: std::ops::Range<usize>, touched: &mut u64) -> Option<usize> {
+        let samples = self.samples;
+        let inv_cell = self.other.grid.inv_cell;
+        let mut live = [0u16; 64];
+        let mut n_live = 0;
+        for chunk in chunks {
+            let (centre, radius) = samples.chunk_spheres[chunk];
+            match self
+                .map
+                .sphere_side(&self.other.clearance, centre, radius * inv_cell)
+            {
+                Some(false) => self.outside_seen |= samples.chunk_components[chunk],
+                Some(true) => {
+                    *touched |= 1 << (chunk % 64);
+                    self.touched = true;
+                    let components = &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK];
+                    for (k, &c) in components.iter().enumerate() {
+                        if self.first_inside[usize::from(c)] == u16::MAX {
+                            self.first_inside[usize::from(c)] = (chunk * CERTIFY_CHUNK + k) as u16;
+                        }
+                    }
+                    self.inside_seen |= samples.chunk_components[chunk];
+                }
+                None => {
+                    live[n_live] = chunk as u16;
+                    n_live += 1;
+                }
+            }
+        }
+        let live = &live[..n_live];
+        // Samples seen inside before, of a component these chunks showed outside.
+        if let Some(j) = self.crossing_sample() {
+            return Some(j);
+        }
+        let mut next = live.first().map(|&c| self.prepare(usize::from(c)));
+        for (i, &chunk) in live.iter().enumerate() {
+            let chunk = usize::from(chunk);
+            let Some((index, on_map)) = next else {
+                break;
+            };
+            next = live.get(i + 1).map(|&c| self.prepare(usize::from(c)));
+            // The chunk's classes, 2 bits per sample, those off the map outside; then the
+            // samples inside and outside as bit masks, without a branch per sample.
+            let mut classes = 0u32;
+            for (k, &index) in index.iter().enumerate() {
+                classes |= u32::from(self.other.class(index as usize)) << (2 * k);
+            }
+            let off_map = spread_bits(!on_map & ((1 << CERTIFY_CHUNK) - 1));
+            classes = (classes & !(off_map * 0b11)) | (off_map * u32::from(OUTSIDE));
+            let inside = gather_bits((classes >> 1) & !classes);
+            let outside = gather_bits(classes & !(classes >> 1));
+            let components = &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK];
+            if outside == (1 << CERTIFY_CHUNK) - 1 {
+                self.outside_seen |= samples.chunk_components[chunk];
+            } else {
+                for k in BitIndices(outside) {
+                    self.outside_seen |= 1 << components[k];
+                }
+                for k in BitIndices(inside) {
+                    let c = components[k];
+                    if self.first_inside[usize::from(c)] == u16::MAX {
+                        self.first_inside[usize::from(c)] = (chunk * CERTIFY_CHUNK + k) as u16;
+                    }
+                    self.inside_seen |= 1 << c;
+                }
+            }
+            // Inside or near the other surface (class 0 or 2: bit 0 clear); a voxel where
+            // the rays disagree says nothing of where the surface is.
+            if !classes & EVEN_BITS != 0 {
+                *touched |= 1 << (chunk % 64);
+                self.touched = true;
+            }
+            if let Some(j) = self.crossing_sample() {
+                return Some(j);
+            }
+        }
+        None
+    }
+
+    /// The first sample seen inside of the first component seen both inside and outside.
+    #[inline]
+    fn crossing_sample(&self) -> Option<usize> {
+        let crossing = self.inside_seen & self.outside_seen & !(1 << NO_COMPONENT);
+        (crossing != 0).then(|| usize::from(self.first_inside[crossing.trailing_zeros() as usize]))
+    }
+
+    /// The certificate of sample `j` found inside.
+    pub(super) fn crossing(&self, j: usize) -> Interpenetration {
+        let s = self.samples;
+        let p = self
+            .to_other
+            .transform_point(Vec3::new(s.x[j], s.y[j], s.z[j]));
+        Interpenetration {
+            inside_point: p,
+            vertex: s.vertex[j],
+            exact: self.other.exact,
+            depth: self.other.depth_inside(p),
+        }
+    }
+}
+
+/// Asks the CPU to bring the byte at `byte` into the cache (a hint: no effect on the result,
+/// nothing read, whatever the address; nothing on targets without the instruction).
+#[inline(always)]
+fn prefetch(byte: *const u8) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch never faults, whatever the address, and reads nothing the program
+    // sees; SSE is part of the x86_64 baseline.
+    unsafe {
+        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+        _mm_prefetch::<_MM_HINT_T0>(byte.cast());
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = byte;
+}
+
+/// The even bits of a chunk's 2-bit classes (one per sample).
+const EVEN_BITS: u32 = 0x5555;
+
+/// Moves bit `2k` of a chunk's 2-bit classes to bit `k` ([`spread_bits`]'s inverse; odd bits
+/// ignored).
+#[inline]
+fn gather_bits(classes: u32) -> u32 {
+    let x = classes & EVEN_BITS;
+    let x = (x | (x >> 1)) & 0x3333;
+    let x = (x | (x >> 2)) & 0x0F0F;
+    (x | (x >> 4)) & 0xFF
+}
+
+/// The indices of the set bits of a mask, lowest first.
+struct BitIndices(u32);
+
+impl Iterator for BitIndices {
+    type Item = usize;
+
+    #[inline]
+    fn next(&mut self) -> Option<usize> {
+        (self.0 != 0).then(|| {
+            let k = self.0.trailing_zeros() as usize;
+            self.0 &= self.0 - 1;
+            k
+        })
+    }
+}
+
+/// Moves bit `k` of an 8-bit mask to bit `2k`.
+#[inline]
+fn spread_bits(mask: u32) -> u32 {
+    let x = (mask | (mask << 4)) & 0x0F0F;
+    let x = (x | (x << 2)) & 0x3333;
+    (x | (x << 1)) & EVEN_BITS
+}
