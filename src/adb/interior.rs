@@ -201,12 +201,11 @@ impl InteriorMap {
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
         self.classes.capacity()
-            + (self.samples.x.capacity() + self.samples.y.capacity() + self.samples.z.capacity())
-                * std::mem::size_of::<f32>()
+            + self.samples.chunks.capacity()
+                * std::mem::size_of::<super::surface_samples::ChunkSamples>()
             + self.samples.vertex.capacity() * std::mem::size_of::<u32>()
             + self.samples.chunk_spheres.capacity() * std::mem::size_of::<(Vec3, f32)>()
             + self.samples.chunk_components.capacity() * std::mem::size_of::<u64>()
-            + self.samples.component.capacity()
             + self.clearance.memory_bytes()
     }
 
@@ -338,7 +337,10 @@ impl InteriorMap {
             (0..dims[axis]).contains(&(at[axis] + k))
                 && self.class((from + k * stride[axis]) as usize) == INSIDE
         };
-        let steps = (1..=i64::from(DEPTH_SEARCH_VOXELS))
+        // The first steps the clearance knows to be inside are skipped.
+        let known = self.clearance.inside_steps(at.map(|c| c as u32));
+        let first = i64::from(known.min(DEPTH_SEARCH_VOXELS - 1)) + 1;
+        let steps = (first..=i64::from(DEPTH_SEARCH_VOXELS))
             .find(|&k| (0..3).any(|axis| !inside(axis, k) || !inside(axis, -k)))
             .unwrap_or(i64::from(DEPTH_SEARCH_VOXELS));
         (steps as f32 - 0.5) * grid.cell
@@ -435,4 +437,47 @@ pub enum PairCrossing {
 
 fn min_max(x: [f64; 3]) -> (f64, f64) {
     (x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    /// The depth skips the steps the clearance knows to be inside, and equals the depth found
+    /// step by step from the first.
+    #[test]
+    fn depth_with_the_clearance_equals_the_full_search() {
+        let mesh = CollisionMesh::new(generate::icosphere(1.0, 3));
+        let map = InteriorMap::build(&mesh, 96, 64);
+        let grid = map.grid;
+        let full = |p: Vec3| {
+            let at = ((p - grid.origin) * grid.inv_cell).floor();
+            let steps = (1..=DEPTH_SEARCH_VOXELS)
+                .find(|&k| {
+                    [Vec3::X, Vec3::Y, Vec3::Z].iter().any(|&axis| {
+                        [k as f32, -(k as f32)].iter().any(|&s| {
+                            let c = at + axis * s + 0.5;
+                            map.class_at(grid.origin + c * grid.cell) != INSIDE
+                        })
+                    })
+                })
+                .unwrap_or(DEPTH_SEARCH_VOXELS);
+            (steps as f32 - 0.5) * grid.cell
+        };
+        let mut deep = 0;
+        for i in 0..2000 {
+            let t = i as f32 * 0.618_034;
+            let p =
+                Vec3::new(t.sin(), (1.7 * t).cos(), (2.3 * t).sin()) * 0.95 * (i as f32 / 2000.0);
+            if map.classify(p) == Some(true) {
+                assert_eq!(map.depth_inside(p), full(p), "{p}");
+                deep += usize::from(map.depth_inside(p) > 20.0 * grid.cell);
+            }
+        }
+        assert!(
+            deep > 10,
+            "{deep} points deeper than the clearance's first block"
+        );
+    }
 }

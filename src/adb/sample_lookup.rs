@@ -1,10 +1,10 @@
 //! One mesh's surface samples looked up in another mesh's [`InteriorMap`]: the work of the
 //! interpenetration certificate ([`InteriorMap::certify_pair`], [`InteriorMap::look_up`]).
-use glam::{Mat3, Vec3};
+use glam::Mat3;
 
 use super::interior::{CERTIFY_CHUNK, InteriorMap, Interpenetration, OUTSIDE};
 use super::surface_samples::{NO_COMPONENT, REFINEMENT, SurfaceSamples};
-use super::voxel_map::{Chunk, VoxelMap};
+use super::voxel_map::VoxelMap;
 use crate::geometry::Pose;
 
 /// One mesh's samples being looked up in another mesh's map, and what they showed so far.
@@ -32,7 +32,7 @@ impl<'a> Lookup<'a> {
         other: &'a InteriorMap,
         to_other: &Pose,
     ) -> Option<Self> {
-        if other.classes.is_empty() || this.samples.x.is_empty() || !to_other.is_finite() {
+        if other.classes.is_empty() || this.samples.chunks.is_empty() || !to_other.is_finite() {
             return None;
         }
         // The transform and the voxel lookup in one affine map, to voxel coordinates.
@@ -101,14 +101,10 @@ impl<'a> Lookup<'a> {
     /// A chunk's voxel indices and on-map mask, the bytes it will read prefetched.
     #[inline]
     fn prepare(&self, chunk: usize) -> ([i32; CERTIFY_CHUNK], u32) {
-        let samples = self.samples;
-        let range = chunk * CERTIFY_CHUNK..(chunk + 1) * CERTIFY_CHUNK;
+        let c = &self.samples.chunks[chunk];
         // Branch-free (vectorised where the target allows): where a sample lands does not
         // predict well.
-        let (index, on_map) = self.map.voxel_indices(
-            [&samples.x, &samples.y, &samples.z]
-                .map(|c| <&Chunk>::try_from(&c[range.clone()]).expect("whole chunks")),
-        );
+        let (index, on_map) = self.map.voxel_indices([&c.x, &c.y, &c.z]);
         for &i in &index {
             prefetch(self.other.classes.as_ptr().wrapping_add(i as usize / 4));
         }
@@ -137,7 +133,7 @@ impl<'a> Lookup<'a> {
                 Some(true) => {
                     *touched |= 1 << (chunk % 64);
                     self.touched = true;
-                    let components = &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK];
+                    let components = &samples.chunks[chunk].component;
                     for (k, &c) in components.iter().enumerate() {
                         if self.first_inside[usize::from(c)] == u16::MAX {
                             self.first_inside[usize::from(c)] = (chunk * CERTIFY_CHUNK + k) as u16;
@@ -173,7 +169,7 @@ impl<'a> Lookup<'a> {
             classes = (classes & !(off_map * 0b11)) | (off_map * u32::from(OUTSIDE));
             let inside = gather_bits((classes >> 1) & !classes);
             let outside = gather_bits(classes & !(classes >> 1));
-            let components = &samples.component[chunk * CERTIFY_CHUNK..][..CERTIFY_CHUNK];
+            let components = &samples.chunks[chunk].component;
             if outside == (1 << CERTIFY_CHUNK) - 1 {
                 self.outside_seen |= samples.chunk_components[chunk];
             } else {
@@ -211,9 +207,7 @@ impl<'a> Lookup<'a> {
     /// The certificate of sample `j` found inside.
     pub(super) fn crossing(&self, j: usize) -> Interpenetration {
         let s = self.samples;
-        let p = self
-            .to_other
-            .transform_point(Vec3::new(s.x[j], s.y[j], s.z[j]));
+        let p = self.to_other.transform_point(s.point(j));
         Interpenetration {
             inside_point: p,
             vertex: s.vertex[j],

@@ -21,20 +21,16 @@ pub(super) const REFINEMENT: usize = 64;
 /// lie), the support samples settle most of the deep overlaps the evenly spread ones missed.
 pub(super) const SUPPORT_BINS: u32 = 8;
 
-/// Points on a mesh's surface (with their connected components), in structure-of-arrays form,
-/// padded to whole chunks by repeating the last sample: the coarse samples, then per coarse
+/// Points on a mesh's surface (with their connected components), in chunks of
+/// [`CERTIFY_CHUNK`] (padded by repeating the last sample): the coarse samples, then per coarse
 /// chunk the finer samples of the same part of the surface, then one support chunk per
 /// direction bin (a chunk of leading vertices, then one of trailing vertices).
 #[derive(Debug, Clone, Default)]
 pub(super) struct SurfaceSamples {
-    pub x: Vec<f32>,
-    pub y: Vec<f32>,
-    pub z: Vec<f32>,
+    /// The samples, a chunk at a time.
+    pub chunks: Vec<ChunkSamples>,
     /// Per sample, the vertex it is.
     pub vertex: Vec<u32>,
-    /// Per sample, the size rank of its connected component (below [`NO_COMPONENT`]), or
-    /// [`NO_COMPONENT`].
-    pub component: Vec<u8>,
     /// Per chunk of [`CERTIFY_CHUNK`] samples, a sphere around them (centre, radius).
     pub chunk_spheres: Vec<(Vec3, f32)>,
     /// Per chunk, bit `c` set for each component rank `c` of its samples.
@@ -49,7 +45,28 @@ pub(super) struct SurfaceSamples {
     pub centre: Vec3,
 }
 
+/// One chunk of samples: coordinates in structure-of-arrays form, for a vectorised transform,
+/// and component ranks, together in two cache lines (a chunk looked up is read whole).
+#[derive(Debug, Clone, Copy, Default)]
+#[repr(C, align(64))]
+pub(super) struct ChunkSamples {
+    pub x: [f32; CERTIFY_CHUNK],
+    pub y: [f32; CERTIFY_CHUNK],
+    pub z: [f32; CERTIFY_CHUNK],
+    /// Per sample, the size rank of its connected component (below [`NO_COMPONENT`]), or
+    /// [`NO_COMPONENT`].
+    pub component: [u8; CERTIFY_CHUNK],
+}
+
 impl SurfaceSamples {
+    /// Sample `j`'s point.
+    #[inline]
+    pub fn point(&self, j: usize) -> Vec3 {
+        let c = &self.chunks[j / CERTIFY_CHUNK];
+        let k = j % CERTIFY_CHUNK;
+        Vec3::new(c.x[k], c.y[k], c.z[k])
+    }
+
     /// Up to `count` coarse vertices spread over the surface of `mesh` (every connected
     /// component, in proportion to its triangles): one per equal share of the BVH's leaf
     /// order, so spatially coherent chunks; [`REFINEMENT`] finer ones per coarse chunk; and
@@ -68,12 +85,18 @@ impl SurfaceSamples {
         let order = mesh.bvh().leaf_triangles();
         let count = count.min(order.len());
         let mut push = |vertex: u32| {
+            let j = samples.vertex.len();
+            if j.is_multiple_of(CERTIFY_CHUNK) {
+                samples.chunks.push(ChunkSamples::default());
+            }
+            let (c, k) = (
+                samples.chunks.last_mut().expect("pushed"),
+                j % CERTIFY_CHUNK,
+            );
             let p = positions[vertex as usize];
-            samples.x.push(p.x);
-            samples.y.push(p.y);
-            samples.z.push(p.z);
+            (c.x[k], c.y[k], c.z[k]) = (p.x, p.y, p.z);
+            c.component[k] = rank[vertex as usize];
             samples.vertex.push(vertex);
-            samples.component.push(rank[vertex as usize]);
         };
         let vertex_at = |position: usize| triangles[order[position] as usize][0];
         // The coarse samples: one per equal share of the leaf order, padded to whole chunks.
@@ -114,14 +137,14 @@ impl SurfaceSamples {
             first
         });
         samples.support_first = support_first;
-        samples.chunk_spheres = (0..samples.x.len())
+        samples.chunk_spheres = (0..samples.vertex.len())
             .step_by(CERTIFY_CHUNK)
             .map(|start| samples.sphere(start))
             .collect();
         samples.chunk_components = samples
-            .component
-            .chunks(CERTIFY_CHUNK)
-            .map(|chunk| chunk.iter().fold(0, |bits, &c| bits | 1 << c))
+            .chunks
+            .iter()
+            .map(|chunk| chunk.component.iter().fold(0, |bits, &c| bits | 1 << c))
             .collect();
         samples
     }
@@ -130,7 +153,7 @@ impl SurfaceSamples {
     /// whatever the rounding.
     fn sphere(&self, start: usize) -> (Vec3, f32) {
         let points: Vec<Vec3> = (start..start + CERTIFY_CHUNK)
-            .map(|j| Vec3::new(self.x[j], self.y[j], self.z[j]))
+            .map(|j| self.point(j))
             .collect();
         let (lo, hi) = points.iter().fold((points[0], points[0]), |(lo, hi), &p| {
             (lo.min(p), hi.max(p))
