@@ -44,8 +44,10 @@ pub struct AdbBuildOptions {
     pub interior_resolution: u32,
     /// Coarse surface samples of the mesh that the certificate always looks up in the other
     /// mesh's map (at most [`MAX_SURFACE_SAMPLES`](super::MAX_SURFACE_SAMPLES); each chunk of
-    /// them also has finer samples, looked up only where it came near the other mesh). 128 by
-    /// default: on the `accuracy_vs_time` poses 64 and 256 were slower (`--interior-samples`).
+    /// them also has finer samples, looked up only where it came near the other mesh; the map
+    /// also holds the leading samples of 384 directions, about 140 kB, whatever this is). 128
+    /// by default: on the `accuracy_vs_time` poses 64 and 256 were slower
+    /// (`--interior-samples`).
     pub interior_samples: usize,
 }
 
