@@ -15,6 +15,9 @@ pub(super) const NO_COMPONENT: u8 = 63;
 /// coarse samples straddle the other surface without one inside it get a denser look there.
 pub(super) const REFINEMENT: usize = 64;
 
+/// Vertices from which the support samples' six cube faces are found on threads of their own.
+const PARALLEL_SUPPORT_VERTICES: usize = 4096;
+
 /// Direction bins along each side of a cube face for the support samples: `6 · n²` bins of
 /// about `90° / n` each. With 8 (384 bins, about 11° each), on the `accuracy_vs_time` poses of
 /// ogre (whose horns and arms reach into the other copy where few of its evenly spread samples
@@ -263,77 +266,77 @@ fn support_chunks(
         }
         best.1
     };
-    let faces: Vec<Vec<[[u32; CERTIFY_CHUNK]; 2]>> = std::thread::scope(|s| {
-        let handles: Vec<_> = (0..6u32)
-            .map(|face| {
-                let farthest = &farthest;
-                let relative = &relative;
-                s.spawn(move || {
-                    // The support vertex of every corner direction of the face's bins.
-                    let corners: Vec<u32> = (0..(n + 1) * (n + 1))
-                        .map(|k| {
-                            farthest(face_direction(
-                                face,
-                                coordinate(k % (n + 1)),
-                                coordinate(k / (n + 1)),
-                            ))
-                        })
-                        .collect();
-                    let mut chunks = Vec::with_capacity((n * n) as usize);
-                    for iv in 0..n {
-                        for iu in 0..n {
-                            let at = |du: u32, dv: u32| {
-                                corners[((iv + dv) * (n + 1) + iu + du) as usize]
-                            };
-                            let d = face_direction(
-                                face,
-                                coordinate(iu) + 1.0 / n as f32,
-                                coordinate(iv) + 1.0 / n as f32,
-                            );
-                            let mut leading: Vec<u32> = Vec::with_capacity(CERTIFY_CHUNK);
-                            for v in [at(0, 0), at(1, 0), at(0, 1), at(1, 1)] {
-                                if !leading.contains(&v) && leading.len() < CERTIFY_CHUNK {
-                                    leading.push(v);
-                                }
-                            }
-                            // The rest: the farthest along the centre direction, and per
-                            // component the farthest back.
-                            let mut ahead: Vec<(f32, u32)> = Vec::with_capacity(CERTIFY_CHUNK + 1);
-                            let mut back = [(f32::INFINITY, u32::MAX); 64];
-                            for (p, &v) in relative.iter().zip(used) {
-                                let h = p.dot(d);
-                                let c = usize::from(rank[v as usize]);
-                                if h < back[c].0 {
-                                    back[c] = (h, v);
-                                }
-                                if ahead.len() < CERTIFY_CHUNK || h > ahead[ahead.len() - 1].0 {
-                                    let at = ahead.partition_point(|&(g, _)| g >= h);
-                                    ahead.insert(at, (h, v));
-                                    ahead.truncate(CERTIFY_CHUNK);
-                                }
-                            }
-                            for &(_, v) in &ahead {
-                                if leading.len() < CERTIFY_CHUNK && !leading.contains(&v) {
-                                    leading.push(v);
-                                }
-                            }
-                            while leading.len() < CERTIFY_CHUNK {
-                                leading.push(leading[0]);
-                            }
-                            let leading: [u32; CERTIFY_CHUNK] =
-                                leading.try_into().expect("a whole chunk");
-                            let trailing = leading.map(|v| back[usize::from(rank[v as usize])].1);
-                            chunks.push([leading, trailing]);
-                        }
-                    }
-                    chunks
-                })
+    // The bins of one cube face.
+    let face_chunks = |face: u32| {
+        // The support vertex of every corner direction of the face's bins.
+        let corners: Vec<u32> = (0..(n + 1) * (n + 1))
+            .map(|k| {
+                farthest(face_direction(
+                    face,
+                    coordinate(k % (n + 1)),
+                    coordinate(k / (n + 1)),
+                ))
             })
             .collect();
-        handles
-            .into_iter()
-            .map(|h| h.join().expect("support samples of a cube face"))
-            .collect()
-    });
+        let mut chunks = Vec::with_capacity((n * n) as usize);
+        for iv in 0..n {
+            for iu in 0..n {
+                let at = |du: u32, dv: u32| corners[((iv + dv) * (n + 1) + iu + du) as usize];
+                let d = face_direction(
+                    face,
+                    coordinate(iu) + 1.0 / n as f32,
+                    coordinate(iv) + 1.0 / n as f32,
+                );
+                let mut leading: Vec<u32> = Vec::with_capacity(CERTIFY_CHUNK);
+                for v in [at(0, 0), at(1, 0), at(0, 1), at(1, 1)] {
+                    if !leading.contains(&v) && leading.len() < CERTIFY_CHUNK {
+                        leading.push(v);
+                    }
+                }
+                // The rest: the farthest along the centre direction, and per
+                // component the farthest back.
+                let mut ahead: Vec<(f32, u32)> = Vec::with_capacity(CERTIFY_CHUNK + 1);
+                let mut back = [(f32::INFINITY, u32::MAX); 64];
+                for (p, &v) in relative.iter().zip(used) {
+                    let h = p.dot(d);
+                    let c = usize::from(rank[v as usize]);
+                    if h < back[c].0 {
+                        back[c] = (h, v);
+                    }
+                    if ahead.len() < CERTIFY_CHUNK || h > ahead[ahead.len() - 1].0 {
+                        let at = ahead.partition_point(|&(g, _)| g >= h);
+                        ahead.insert(at, (h, v));
+                        ahead.truncate(CERTIFY_CHUNK);
+                    }
+                }
+                for &(_, v) in &ahead {
+                    if leading.len() < CERTIFY_CHUNK && !leading.contains(&v) {
+                        leading.push(v);
+                    }
+                }
+                while leading.len() < CERTIFY_CHUNK {
+                    leading.push(leading[0]);
+                }
+                let leading: [u32; CERTIFY_CHUNK] = leading.try_into().expect("a whole chunk");
+                let trailing = leading.map(|v| back[usize::from(rank[v as usize])].1);
+                chunks.push([leading, trailing]);
+            }
+        }
+        chunks
+    };
+    // Six faces in parallel where the mesh is large enough for threads to pay.
+    let faces: Vec<Vec<[[u32; CERTIFY_CHUNK]; 2]>> = if used.len() < PARALLEL_SUPPORT_VERTICES {
+        (0..6).map(face_chunks).collect()
+    } else {
+        std::thread::scope(|s| {
+            let handles: Vec<_> = (0..6u32)
+                .map(|face| s.spawn(move || face_chunks(face)))
+                .collect();
+            handles
+                .into_iter()
+                .map(|h| h.join().expect("support samples of a cube face"))
+                .collect()
+        })
+    };
     faces.into_iter().flatten().collect()
 }
