@@ -659,3 +659,49 @@ fn straddle_still_decides_on_evidence_and_reports_its_frontier() {
     assert!(on_evidence >= 10, "{on_evidence} answers on evidence");
     assert!(cut >= 20, "{cut} budget-cut answers");
 }
+
+/// The confidence a failed certificate maps through is fitted on a tree against itself: it
+/// applies to such a pair, and between two trees (even of the same mesh) the frontier's
+/// confidence stands, as without the certificate (a thin wall's map says little of a ball).
+#[test]
+fn the_failed_certificate_calibration_applies_only_to_a_tree_against_itself() {
+    let build = || AdbTree::new(CollisionMesh::new(generate::icosphere(1.0, 3)));
+    let (tree, twin) = (build(), build());
+    assert!(tree.confidence_calibration().is_some());
+    let mut ws = AdbWorkspace::new();
+    let budgeted = AdbQuery {
+        budget: Budget::NodePairs(12),
+        ..AdbQuery::default()
+    };
+    let plain = AdbQuery {
+        interior_after: None,
+        ..budgeted.clone()
+    };
+    let (mut mapped, mut compared) = (0, 0);
+    let poses = near_contact_poses(tree.collision_mesh(), twin.collision_mesh(), 40, 0.05, 9);
+    for p in &poses {
+        let (pose, x) = (p.pose, p.offset);
+        let with = |b: &AdbTree, q: &AdbQuery, ws: &mut AdbWorkspace| {
+            adb_intersects(&tree, &Pose::IDENTITY, b, &pose, q, ws)
+        };
+        let (twin_on, twin_off) = (
+            with(&twin, &budgeted, &mut ws),
+            with(&twin, &plain, &mut ws),
+        );
+        if twin_on.interpenetration.is_some() || !twin_on.budget_exhausted {
+            continue; // settled by the certificate or by the traversal: nothing to map
+        }
+        compared += 1;
+        assert_eq!(twin_on.probability, twin_off.probability, "at {x}");
+        let (self_on, self_off) = (
+            with(&tree, &budgeted, &mut ws),
+            with(&tree, &plain, &mut ws),
+        );
+        assert!(self_on.interpenetration.is_none() && self_on.budget_exhausted);
+        mapped += usize::from(self_on.probability != self_off.probability);
+    }
+    assert!(
+        compared >= 5 && mapped >= 3,
+        "{compared} compared, {mapped} mapped"
+    );
+}

@@ -7,7 +7,9 @@
 //! confidence alone says. So, as the pair estimates are fitted on the mesh ([`super::fit`]),
 //! the reported confidence of those answers is mapped to the frequency with which such answers
 //! truly collide, measured on seeded training poses of the mesh against itself under a range of
-//! node budgets.
+//! node budgets. It applies to a tree queried against itself, the pairs it was fitted on;
+//! between different trees the frontier's confidence stands (what a failed certificate says
+//! depends on both meshes: against a thin wall, whose map has next to no inside, very little).
 use super::fit::{FitOptions, RAW_BINS, monotone_rates, raw_bin};
 use super::traverse::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
 use super::tree::AdbTree;

@@ -711,14 +711,19 @@ pub fn adb_intersects(
         // independent piece, as in the evidence rules.
         let log_miss = (frontier_log_miss + queued) / EVIDENCE_REDUNDANCY;
         out.probability = (1.0 - log_miss.exp()).clamp(0.0, 1.0);
-        if interior_failed && out.probability > 0.0 && out.probability < 1.0 {
-            // A failed certificate is evidence against the deep overlaps: the confidence as
-            // calibrated for such answers on the meshes themselves (the mean of the two fits).
-            let fitted = [a, b].map(|t| {
-                t.confidence_calibration()
-                    .map_or(out.probability, |c| c.map(out.probability))
-            });
-            out.probability = ((fitted[0] + fitted[1]) * 0.5).clamp(0.0, MAX_ESTIMATE);
+        // A failed certificate is evidence against the deep overlaps: the confidence as
+        // calibrated for such answers on the mesh itself, for a tree against itself, the pairs
+        // it was fitted on. Between different trees it does not carry over (a thin wall's map
+        // has next to no inside for a ball's samples to land in, so there the certificate's
+        // failure says little: the cannonball example missed a third of its hits with it),
+        // and the frontier's confidence stands.
+        if interior_failed
+            && std::ptr::eq(a, b)
+            && out.probability > 0.0
+            && out.probability < 1.0
+            && let Some(c) = a.confidence_calibration()
+        {
+            out.probability = c.map(out.probability).clamp(0.0, MAX_ESTIMATE);
         }
         if !out.collides {
             out.collides = match query.decision {
