@@ -7,12 +7,13 @@
 //! `support/cannonball.rs`, `embed`): the way a game adds its own reaction to contacts.
 //!
 //! ```text
-//! cargo run --release --example cannonball -- [SHOTS] [P_MIN] [NODE_PAIRS_PER_FRAME] [COLLIDE_AT]
+//! cargo run --release --example cannonball -- [SHOTS] [P_MIN] [NODE_PAIRS_PER_FRAME] [COLLIDE_AT] [on|off]
 //! ```
 //!
 //! `COLLIDE_AT` (default 0.2): the confidence from which an ADB answer its traversal did not
 //! settle counts as a hit (`CollisionConfig::adb_collide_at`): a missed hit loses the shot,
-//! a false one stops it a frame early.
+//! a false one stops it a frame early. The last argument turns the interpenetration
+//! certificate on (`CollisionConfig::adb_interior`; off by default in this scene).
 mod support;
 
 use std::time::Duration;
@@ -64,11 +65,13 @@ fn main() {
         .next()
         .and_then(|a| a.parse().ok())
         .unwrap_or(cannonball::COLLIDE_AT);
+    let adb_interior = args.next().map(|a| a == "on");
     let frames = 150;
     // ADB gets a small work budget per frame: what a game would give a background effect.
     let options = Options {
         entities: shots,
         node_budget: Some(node_budget),
+        adb_interior,
         ..Options::default()
     };
     let adb = simulate(&options, Fidelity::Adb { p_min }, collide_at, frames);

@@ -85,8 +85,6 @@ pub struct InteriorMap {
     /// The class of every voxel, 2 bits each, four to a byte (x fastest, then y, then z), so
     /// that a map of a million voxels takes a quarter of a megabyte and stays in cache.
     pub(super) classes: Vec<u8>,
-    /// Voxels in the map.
-    voxels: usize,
     pub(super) exact: bool,
     pub(super) samples: SurfaceSamples,
     /// How far each block of voxels is from the nearest voxel not wholly outside, and from the
@@ -125,8 +123,9 @@ pub enum SampleLookup {
 
 impl InteriorMap {
     /// Builds the map of `mesh` with `resolution` voxels along the longest side of its box
-    /// (at least 1), and up to `samples` (at most [`MAX_SURFACE_SAMPLES`]) surface samples:
-    /// vertices spread evenly over the BVH's leaf order, so over the surface.
+    /// (at least 1), up to `samples` (at most [`MAX_SURFACE_SAMPLES`]) coarse surface samples
+    /// (vertices spread evenly over the BVH's leaf order, so over the surface) with their finer
+    /// samples, and the leading samples of every direction (see the module documentation).
     pub fn build(mesh: &CollisionMesh, resolution: u32, samples: usize) -> Self {
         let tri_mesh = mesh.mesh();
         let topology = Topology::new(tri_mesh);
@@ -138,7 +137,6 @@ impl InteriorMap {
         let mut map = Self {
             grid,
             classes: vec![0; voxels.div_ceil(4)],
-            voxels,
             exact: exact && voxels > 0,
             samples,
             clearance: Clearance::default(),
@@ -193,7 +191,11 @@ impl InteriorMap {
 
     /// Voxels classified inside and outside (the rest are near the surface or undecided).
     pub fn classified_voxels(&self) -> (usize, usize) {
-        let count = |class| (0..self.voxels).filter(|&i| self.class(i) == class).count();
+        let count = |class| {
+            (0..self.grid.voxels())
+                .filter(|&i| self.class(i) == class)
+                .count()
+        };
         let (inside, outside) = (count(INSIDE), count(OUTSIDE));
         (inside, outside)
     }
@@ -291,7 +293,6 @@ impl InteriorMap {
         second_to_first: &Pose,
     ) -> Option<PairCrossing> {
         let mut second_in_first = Lookup::new(second, first, second_to_first);
-        let mut first_in_second = Lookup::new(first, second, &second_to_first.inverse());
         let found_in_first = |l: &Lookup<'_>, j| PairCrossing::SecondInFirst(l.crossing(j));
         let found_in_second = |l: &Lookup<'_>, j| PairCrossing::FirstInSecond(l.crossing(j));
         if let Some(l) = &mut second_in_first
@@ -299,6 +300,8 @@ impl InteriorMap {
         {
             return Some(found_in_first(l, j));
         }
+        // Made only once the second mesh's leading samples have settled nothing.
+        let mut first_in_second = Lookup::new(first, second, &second_to_first.inverse());
         if let Some(l) = &mut first_in_second
             && let Some(j) = l.support()
         {

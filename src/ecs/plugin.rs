@@ -79,7 +79,7 @@ pub struct CollisionConfig {
     /// found inside the other mesh. On by default. Turn it off for scenes of small objects
     /// against thin parts (a ball against walls a few voxels thick): samples seldom land
     /// inside such parts, so it settles little there and costs its lookups on every pair (the
-    /// `cannonball` example runs without it: twice the narrow phase's time with it).
+    /// `cannonball` example runs without it: half as much narrow-phase time again with it).
     pub adb_interior: bool,
     /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
     /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
