@@ -153,19 +153,6 @@ impl Clearance {
         }
     }
 
-    /// The voxel steps along any axis from voxel `voxel` (on the grid) known to stay in voxels
-    /// classified inside: `BLOCK · (k − 1)` for its block `k` blocks from the nearest block not
-    /// wholly inside (a voxel `s` steps away lies in a block at most `⌈s / BLOCK⌉` away).
-    #[inline]
-    pub fn inside_steps(&self, voxel: [u32; 3]) -> u32 {
-        let at = voxel.map(|v| v / BLOCK);
-        let k = self
-            .blocks
-            .get(((at[2] * self.dims[1] + at[1]) * self.dims[0] + at[0]) as usize)
-            .map_or(0, |b| b[1]);
-        BLOCK * u32::from(k.saturating_sub(1))
-    }
-
     /// Bytes held.
     pub fn memory_bytes(&self) -> usize {
         self.blocks.capacity()

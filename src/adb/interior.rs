@@ -56,7 +56,7 @@ const AMBIGUOUS: u8 = 3;
 /// Most coarse surface samples an [`InteriorMap`] keeps (in at most 64 chunks).
 pub const MAX_SURFACE_SAMPLES: usize = 64 * CERTIFY_CHUNK;
 
-/// Voxels searched in each direction for [`Interpenetration::depth`].
+/// Most voxels [`Interpenetration::depth`] reaches in each direction.
 const DEPTH_SEARCH_VOXELS: u32 = 64;
 
 /// Samples looked up between two checks of whether the certificate is found (a multiple of 4,
@@ -90,6 +90,8 @@ pub struct InteriorMap {
     /// How far each block of voxels is from the nearest voxel not wholly outside, and from the
     /// nearest not wholly inside.
     pub(super) clearance: Clearance,
+    /// Per voxel, [`InteriorMap::depth_steps`]: a certificate's depth, in voxel steps.
+    depth_steps: Vec<u8>,
 }
 
 /// What [`InteriorMap::certify`] found: a sample of one surface inside the other mesh (and one
@@ -140,6 +142,7 @@ impl InteriorMap {
             exact: exact && voxels > 0,
             samples,
             clearance: Clearance::default(),
+            depth_steps: Vec::new(),
         };
         let surface = grid.surface_voxels(tri_mesh);
         // Odd parity along each axis, one bit per axis.
@@ -168,6 +171,7 @@ impl InteriorMap {
             INSIDE => Some(true),
             _ => None,
         });
+        map.depth_steps = map.depth_steps();
         map
     }
 
@@ -209,6 +213,7 @@ impl InteriorMap {
             + self.samples.chunk_spheres.capacity() * std::mem::size_of::<(Vec3, f32)>()
             + self.samples.chunk_components.capacity() * std::mem::size_of::<u64>()
             + self.clearance.memory_bytes()
+            + self.depth_steps.capacity()
     }
 
     /// `Some(true)` if `p` (in the mesh's frame) lies in a voxel classified inside,
@@ -323,7 +328,8 @@ impl InteriorMap {
 
     /// How far `p` (in this mesh's frame, in a voxel classified inside) is from the first voxel
     /// along one of the six axis directions that is not classified inside, from the centre of
-    /// its voxel: at least half a voxel, at most [`DEPTH_SEARCH_VOXELS`] voxels.
+    /// its voxel: at least half a voxel, at most [`DEPTH_SEARCH_VOXELS`] voxels. One lookup in
+    /// [`InteriorMap::depth_steps`].
     pub(super) fn depth_inside(&self, p: Vec3) -> f32 {
         let grid = &self.grid;
         let q = (p - grid.origin) * grid.inv_cell;
@@ -332,21 +338,44 @@ impl InteriorMap {
         if (0..3).any(|i| !(0..dims[i]).contains(&at[i])) {
             return 0.5 * grid.cell;
         }
-        let stride = [1, dims[0], dims[0] * dims[1]];
-        let from = at[0] + at[1] * stride[1] + at[2] * stride[2];
-        // Whether the voxel `k` steps from `at` along `axis` (either way: the sign of `k`) is
-        // on the map and inside.
-        let inside = |axis: usize, k: i64| {
-            (0..dims[axis]).contains(&(at[axis] + k))
-                && self.class((from + k * stride[axis]) as usize) == INSIDE
-        };
-        // The first steps the clearance knows to be inside are skipped.
-        let known = self.clearance.inside_steps(at.map(|c| c as u32));
-        let first = i64::from(known.min(DEPTH_SEARCH_VOXELS - 1)) + 1;
-        let steps = (first..=i64::from(DEPTH_SEARCH_VOXELS))
-            .find(|&k| (0..3).any(|axis| !inside(axis, k) || !inside(axis, -k)))
-            .unwrap_or(i64::from(DEPTH_SEARCH_VOXELS));
-        (steps as f32 - 0.5) * grid.cell
+        let i = ((at[2] * dims[1] + at[1]) * dims[0] + at[0]) as usize;
+        let steps = self.depth_steps.get(i).copied().unwrap_or(1);
+        (f32::from(steps) - 0.5) * grid.cell
+    }
+
+    /// Per voxel, the steps along the nearest of the six axis directions to the first voxel
+    /// beyond it that is not classified inside (or off the map), at most
+    /// [`DEPTH_SEARCH_VOXELS`]: two sweeps along every row of voxels per axis, so a
+    /// certificate's depth is one lookup. Searched at query time, six voxels per step in
+    /// scattered cache lines, it took about a sixth of a certified query's time (ogre's
+    /// `accuracy_vs_time` poses: 0.92 µs per certificate with the search, 0.76 µs without it).
+    fn depth_steps(&self) -> Vec<u8> {
+        let dims = self.grid.dims.map(|d| d as usize);
+        let voxels = self.grid.voxels();
+        let inside: Vec<bool> = (0..voxels).map(|i| self.class(i) == INSIDE).collect();
+        let cap = DEPTH_SEARCH_VOXELS as u8;
+        let mut steps = vec![cap; voxels];
+        let strides = [1, dims[0], dims[0] * dims[1]];
+        for axis in 0..3 {
+            let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+            for a in 0..dims[u] {
+                for b in 0..dims[v] {
+                    let start = a * strides[u] + b * strides[v];
+                    for towards_end in [true, false] {
+                        // Steps from the voxel at hand to the first one beyond it (in the
+                        // direction looked along) not inside: 1 at the map's edge.
+                        let mut run = 1u8;
+                        for j in 0..dims[axis] {
+                            let c = if towards_end { dims[axis] - 1 - j } else { j };
+                            let voxel = start + c * strides[axis];
+                            steps[voxel] = steps[voxel].min(run);
+                            run = if inside[voxel] { (run + 1).min(cap) } else { 1 };
+                        }
+                    }
+                }
+            }
+        }
+        steps
     }
 
     /// Sets bit `axis` of `odd` for every voxel whose centre has an odd number of surface
@@ -447,10 +476,10 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
 
-    /// The depth skips the steps the clearance knows to be inside, and equals the depth found
-    /// step by step from the first.
+    /// The depth looked up equals the depth found step by step from the first, along the six
+    /// axis directions, for points deep and shallow inside.
     #[test]
-    fn depth_with_the_clearance_equals_the_full_search() {
+    fn depth_from_the_table_equals_the_full_search() {
         let mesh = CollisionMesh::new(generate::icosphere(1.0, 3));
         let map = InteriorMap::build(&mesh, 96, 64);
         let grid = map.grid;
@@ -478,9 +507,6 @@ mod tests {
                 deep += usize::from(map.depth_inside(p) > 20.0 * grid.cell);
             }
         }
-        assert!(
-            deep > 10,
-            "{deep} points deeper than the clearance's first block"
-        );
+        assert!(deep > 10, "{deep} points deeper than 20 voxels");
     }
 }
