@@ -57,7 +57,7 @@ const AMBIGUOUS: u8 = 3;
 pub const MAX_SURFACE_SAMPLES: usize = 64 * CERTIFY_CHUNK;
 
 /// Most voxels [`Interpenetration::depth`] reaches in each direction.
-const DEPTH_SEARCH_VOXELS: u32 = 64;
+const MAX_DEPTH_STEPS: u32 = 64;
 
 /// Samples looked up between two checks of whether the certificate is found (a multiple of 4,
 /// at most 8: a chunk's 2-bit classes fill 16 bits).
@@ -90,7 +90,7 @@ pub struct InteriorMap {
     /// How far each block of voxels is from the nearest voxel not wholly outside, and from the
     /// nearest not wholly inside.
     pub(super) clearance: Clearance,
-    /// Per voxel, [`InteriorMap::depth_steps`]: a certificate's depth, in voxel steps.
+    /// Per voxel, [`InteriorMap::build_depth_steps`]: a certificate's depth, in voxel steps.
     depth_steps: Vec<u8>,
 }
 
@@ -171,7 +171,7 @@ impl InteriorMap {
             INSIDE => Some(true),
             _ => None,
         });
-        map.depth_steps = map.depth_steps();
+        map.depth_steps = map.build_depth_steps();
         map
     }
 
@@ -328,33 +328,29 @@ impl InteriorMap {
 
     /// How far `p` (in this mesh's frame, in a voxel classified inside) is from the first voxel
     /// along one of the six axis directions that is not classified inside, from the centre of
-    /// its voxel: at least half a voxel, at most [`DEPTH_SEARCH_VOXELS`] voxels. One lookup in
-    /// [`InteriorMap::depth_steps`].
+    /// its voxel: at least half a voxel, at most [`MAX_DEPTH_STEPS`] voxels. One lookup in
+    /// [`InteriorMap::build_depth_steps`].
     pub(super) fn depth_inside(&self, p: Vec3) -> f32 {
-        let grid = &self.grid;
-        let q = (p - grid.origin) * grid.inv_cell;
-        let dims = grid.dims.map(i64::from);
-        let at = [q.x, q.y, q.z].map(|c| c.floor() as i64);
-        if (0..3).any(|i| !(0..dims[i]).contains(&at[i])) {
-            return 0.5 * grid.cell;
-        }
-        let i = ((at[2] * dims[1] + at[1]) * dims[0] + at[0]) as usize;
-        let steps = self.depth_steps.get(i).copied().unwrap_or(1);
-        (f32::from(steps) - 0.5) * grid.cell
+        let steps = self
+            .grid
+            .voxel_of(p)
+            .and_then(|i| self.depth_steps.get(i).copied())
+            .unwrap_or(1);
+        (f32::from(steps) - 0.5) * self.grid.cell
     }
 
     /// Per voxel, the steps along the nearest of the six axis directions to the first voxel
     /// beyond it that is not classified inside (or off the map), at most
-    /// [`DEPTH_SEARCH_VOXELS`]: two sweeps along every row of voxels per axis, so a
+    /// [`MAX_DEPTH_STEPS`]: two sweeps along every row of voxels per axis, so a
     /// certificate's depth is one lookup. Searched at query time, six voxels per step in
-    /// scattered cache lines, it took about a sixth of a certified query's time (ogre's
-    /// colliding `accuracy_vs_time` poses, certificates in a tight loop: 0.92 µs each with the
-    /// search, 0.75–0.81 µs with the table).
-    fn depth_steps(&self) -> Vec<u8> {
+    /// scattered cache lines, it took about a sixth of a certified query's time (measured
+    /// during development on ogre's colliding `accuracy_vs_time` poses, certificates in a
+    /// tight loop: 0.92 µs each with the search, 0.75–0.81 µs with the table).
+    fn build_depth_steps(&self) -> Vec<u8> {
         let dims = self.grid.dims.map(|d| d as usize);
         let voxels = self.grid.voxels();
         let inside: Vec<bool> = (0..voxels).map(|i| self.class(i) == INSIDE).collect();
-        let cap = DEPTH_SEARCH_VOXELS as u8;
+        let cap = MAX_DEPTH_STEPS as u8;
         let mut steps = vec![cap; voxels];
         let strides = [1, dims[0], dims[0] * dims[1]];
         for axis in 0..3 {
@@ -486,7 +482,7 @@ mod tests {
         let grid = map.grid;
         let full = |p: Vec3| {
             let at = ((p - grid.origin) * grid.inv_cell).floor();
-            let steps = (1..=DEPTH_SEARCH_VOXELS)
+            let steps = (1..=MAX_DEPTH_STEPS)
                 .find(|&k| {
                     [Vec3::X, Vec3::Y, Vec3::Z].iter().any(|&axis| {
                         [k as f32, -(k as f32)].iter().any(|&s| {
@@ -495,7 +491,7 @@ mod tests {
                         })
                     })
                 })
-                .unwrap_or(DEPTH_SEARCH_VOXELS);
+                .unwrap_or(MAX_DEPTH_STEPS);
             (steps as f32 - 0.5) * grid.cell
         };
         let mut deep = 0;
