@@ -60,10 +60,10 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
         // a frame early: an unsettled answer counts as a hit from a confidence of 0.2.
         config.adb_collide_at = COLLIDE_AT;
         // No interpenetration certificate unless asked for (`cannonball ... on`,
-        // `profile --adb-interior on`): a
-        // ball against thin walls seldom lands a sample in a wall's inside, so it settles
-        // little here and cost half as much narrow-phase time again (27–35 ms against 18–26 ms
-        // for 300 shots, three alternating runs each), at the same verdicts.
+        // `profile --adb-interior on`): a ball against thin walls seldom lands a sample in a
+        // wall's inside, so it settles little here and cost half as much narrow-phase time
+        // again (27–35 ms against 18–26 ms for 300 shots, three alternating runs each), at the
+        // same verdicts.
         config.adb_interior = options.adb_interior.unwrap_or(false);
     }
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(options.seed);

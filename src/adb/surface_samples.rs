@@ -131,7 +131,7 @@ impl SurfaceSamples {
         let used: Vec<u32> = (0..positions.len() as u32)
             .filter(|&v| used[v as usize] && positions[v as usize].is_finite())
             .collect();
-        let centre = mesh.mesh().aabb().center();
+        let centre = samples.centre;
         let support_first = (!used.is_empty()).then(|| {
             let first = (coarse + coarse / CERTIFY_CHUNK * REFINEMENT) / CERTIFY_CHUNK;
             for [leading, trailing] in support_chunks(positions, &used, &rank, centre) {
