@@ -705,3 +705,65 @@ fn the_failed_certificate_calibration_applies_only_to_a_tree_against_itself() {
         "{compared} compared, {mapped} mapped"
     );
 }
+
+/// A certificate tried during the traversal (`interior_after: Some(k)`) pauses it at pop `k`
+/// and resumes it where it stood: when the certificate settles nothing, the traversal visits
+/// exactly the node pairs it visits without one and reaches the same answer (the same hit);
+/// when it settles the answer, the traversal stops there, having visited fewer pairs.
+#[test]
+fn a_certificate_during_the_traversal_pauses_and_resumes_it() {
+    let mut ws = AdbWorkspace::new();
+    let (mut resumed, mut settled) = (0, 0);
+    for (name, tree) in trees() {
+        let m = tree.collision_mesh();
+        for p in near_contact_poses(m, m, 40, 0.15, 0x9A05E) {
+            for k in [1, 2, 5, 70] {
+                let query = |interior_after| AdbQuery {
+                    interior_after,
+                    ..AdbQuery::default()
+                };
+                let during = adb_intersects(
+                    &tree,
+                    &Pose::IDENTITY,
+                    &tree,
+                    &p.pose,
+                    &query(Some(k)),
+                    &mut ws,
+                );
+                let plain = adb_intersects(
+                    &tree,
+                    &Pose::IDENTITY,
+                    &tree,
+                    &p.pose,
+                    &query(None),
+                    &mut ws,
+                );
+                if during.interpenetration.is_some() {
+                    settled += 1;
+                    assert!(during.collides, "{name}");
+                    assert!(
+                        during.node_pairs_visited <= plain.node_pairs_visited,
+                        "{name} k {k}"
+                    );
+                } else {
+                    resumed += 1;
+                    assert_eq!(during.collides, plain.collides, "{name} k {k}");
+                    assert_eq!(
+                        during.node_pairs_visited, plain.node_pairs_visited,
+                        "{name} k {k}"
+                    );
+                    assert_eq!(
+                        during.witness.and_then(|w| w.triangles),
+                        plain.witness.and_then(|w| w.triangles),
+                        "{name} k {k}"
+                    );
+                }
+            }
+        }
+    }
+    // Both paths were taken.
+    assert!(
+        resumed > 50 && settled > 20,
+        "resumed {resumed}, settled {settled}"
+    );
+}

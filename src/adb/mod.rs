@@ -18,6 +18,7 @@
 pub mod cells;
 mod clearance;
 mod confidence_fit;
+mod descent;
 mod estimator;
 mod fit;
 mod interior;

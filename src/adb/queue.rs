@@ -56,6 +56,11 @@ impl Queue {
 
     /// The stacked pairs, to update in place (the heap, whose order depends on them, is not
     /// included: only [`Order::Straddle`] updates its pairs, and it uses only the stack).
+    pub(super) fn stack_vec(&mut self) -> &mut Vec<Entry> {
+        debug_assert!(self.heap.is_empty());
+        &mut self.stack
+    }
+
     pub(super) fn stack_mut(&mut self) -> &mut [Entry] {
         debug_assert!(self.heap.is_empty());
         &mut self.stack
@@ -67,7 +72,7 @@ impl Queue {
 }
 
 /// A queued node pair, ordered by its rank, ties broken by node indices (deterministic).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Entry {
     /// The pair's probability ([`UNESTIMATED`](super::traverse::UNESTIMATED) if not estimated).
     pub(super) p: f64,

@@ -4,13 +4,14 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
+use super::descent::{Descent, DescentEnd, DescentFrame, TRIANGLE_TESTS_PER_POP, leaf_pair_hit};
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
 use super::interior::{InteriorMap, Interpenetration, PairCrossing};
 use super::queue::{Entry, Queue};
-use super::tree::{AdbTree, nodes_overlap, prepare_first, prepare_second};
+use super::tree::{AdbTree, nodes_overlap, overlap_distance, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
-use crate::geometry::{Pose, triangles_intersect};
+use crate::geometry::Pose;
 
 /// When the traversal must stop, whatever it has found.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -41,10 +42,6 @@ pub const EVIDENCE_REDUNDANCY: f64 = 2.0;
 
 /// Queue pops between two clock reads of a [`Budget::Time`] query.
 pub const TIME_CHECK_INTERVAL: u32 = 16;
-
-/// Exact triangle tests that count as one queue pop towards [`TIME_CHECK_INTERVAL`] (a test
-/// costs about what a pop and its four estimates cost).
-const TRIANGLE_TESTS_PER_POP: u32 = 4;
 
 /// The probability of a queued pair not estimated yet ([`Order::Straddle`]).
 pub(super) const UNESTIMATED: f64 = -1.0;
@@ -354,11 +351,7 @@ pub fn adb_intersects(
 ) -> AdbOutcome {
     // The clock is read only for a time budget.
     let start = matches!(query.budget, Budget::Time(_)).then(Instant::now);
-    let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
-    let (na, nb) = (ma.bvh().nodes(), mb.bvh().nodes());
     let rel = pose_a.inverse_mul(pose_b);
-    let frame = RelativeFrame::new(&rel, ma.bvh(), mb.bvh());
-    let rel64 = rel.to_f64();
     let mut out = AdbOutcome {
         collides: false,
         probability: 0.0,
@@ -370,9 +363,28 @@ pub fn adb_intersects(
         interpenetration: None,
     };
     // A pose that is not finite places its mesh nowhere.
-    if !rel.is_finite() || !nodes_overlap(a, b, &frame, 0, 0) {
+    if !rel.is_finite() {
         return out;
     }
+    // Whether the interpenetration certificate was tried and settled nothing.
+    let mut interior_failed = false;
+    // The certificate comes first by default, before anything the traversal needs is set up:
+    // a certified answer costs the certificate alone. (A sample it finds inside the other mesh
+    // lies in both root boxes, so it never certifies a pose whose root boxes are apart.)
+    if query.interior_after == Some(0) {
+        match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
+            Some(true) => return out,
+            Some(false) => interior_failed = true,
+            None => {}
+        }
+    }
+    let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
+    let (na, nb) = (ma.bvh().nodes(), mb.bvh().nodes());
+    let frame = RelativeFrame::new(&rel, ma.bvh(), mb.bvh());
+    if !nodes_overlap(a, b, &frame, 0, 0) {
+        return out;
+    }
+    let rel64 = rel.to_f64();
     let witness = |ia: u32, ib: u32, triangles: Option<TrianglePair>| {
         let (x, y) = (&na[ia as usize], &nb[ib as usize]);
         let ca = pose_a.transform_point(x.aabb().center());
@@ -428,9 +440,6 @@ pub fn adb_intersects(
         && query.exact_leaves
         && query.p_prune <= 0.0
         && disjoint_evidence;
-    // Pops at which an on-demand traversal next estimates its queued pairs and checks the
-    // evidence (doubling: the checks cost a bounded share of the query).
-    let mut next_evidence_check = FIRST_EVIDENCE_CHECK;
     // Σ ln(1 − p) over the pairs left in the frontier for good (leaf pairs not tested, pruned
     // pairs); with the queued pairs, the frontier covers every overlapping leaf pair. Under
     // independence, the probability that no pair collides is exp(Σ ln(1 − p)) over all of it.
@@ -453,51 +462,6 @@ pub fn adb_intersects(
                 *best = Some((key, ia, ib));
             }
         };
-    // Whether the interpenetration certificate was tried and settled nothing.
-    let mut interior_failed = false;
-    // The interpenetration certificate (both ways), once: `true` when it settled the answer.
-    let mut interior = |out: &mut AdbOutcome| {
-        let (Some(map_a), Some(map_b)) = (a.interior(), b.interior()) else {
-            return false;
-        };
-        interior_failed = true;
-        let found = match InteriorMap::certify_pair(map_a, map_b, &rel) {
-            Some(PairCrossing::SecondInFirst(c)) => Some((c, pose_a)),
-            Some(PairCrossing::FirstInSecond(c)) => Some((c, pose_b)),
-            None => None,
-        };
-        let Some((cert, frame_pose)) = found else {
-            return false;
-        };
-        let confidence = if cert.exact {
-            1.0
-        } else {
-            APPROXIMATE_INTERIOR_CONFIDENCE
-        };
-        if confidence < query.p_min {
-            return false;
-        }
-        interior_failed = false;
-        out.collides = true;
-        out.probability = confidence;
-        out.max_pair_probability = out.max_pair_probability.max(confidence);
-        out.pairs_found += 1;
-        let (ca, cb) = (
-            pose_a.transform_point(na[0].aabb().center()),
-            pose_b.transform_point(nb[0].aabb().center()),
-        );
-        out.interpenetration = Some(cert);
-        out.witness = Some(ContactWitness {
-            point: frame_pose.transform_point(cert.inside_point),
-            normal: (cb - ca).try_normalize().unwrap_or(Vec3::Y),
-            nodes: (0, 0),
-            triangles: None,
-        });
-        true
-    };
-    if query.interior_after == Some(0) && interior(&mut out) {
-        return out;
-    }
     let mut pops = 0u32;
     // Work since the last clock read, in pops (a leaf pair's triangle tests count too).
     let mut unclocked = 0u32;
@@ -513,12 +477,19 @@ pub fn adb_intersects(
     ws.exact.cache_begin(mb.mesh().vertex_count());
     // Estimates the queued pairs that have no estimate yet (on-demand mode); returns how many
     // queued pairs count as evidence, and their evidence `Σ −ln(1 − p)`.
-    let estimate_queued = |queue: &mut Queue, out: &mut AdbOutcome, best: &mut Option<_>| {
+    let estimate_queued = |queued: &mut [Entry], max_p: &mut f64, best: &mut Option<_>| {
         let (mut found, mut sum) = (0u32, 0.0f64);
-        for e in queue.stack_mut() {
+        for e in queued {
             if e.p == UNESTIMATED {
-                e.p = estimate(&node_pair(e.a, e.b, e.center_distance));
-                note_estimate(e.p, e.a, e.b, &mut out.max_pair_probability, best);
+                // The descent leaves the centre distance to be worked out here (the same
+                // arithmetic as its box test).
+                let d = if e.center_distance.is_nan() {
+                    overlap_distance(a, b, &frame, e.a, e.b).unwrap_or(0.0)
+                } else {
+                    e.center_distance
+                };
+                e.p = estimate(&node_pair(e.a, e.b, d));
+                note_estimate(e.p, e.a, e.b, max_p, best);
             }
             if e.p >= pair_threshold && (e.a, e.b) != (0, 0) {
                 found += 1;
@@ -527,11 +498,74 @@ pub fn adb_intersects(
         }
         (found, sum)
     };
-    'queue: while let Some(mut e) = ws.queue.pop() {
+    if on_demand {
+        let f = DescentFrame {
+            a,
+            b,
+            frame: &frame,
+            rel64: &rel64,
+            budget: query.budget,
+            start,
+        };
+        let mut descent = Descent {
+            pops: 0,
+            unclocked: 0,
+            next_check: FIRST_EVIDENCE_CHECK,
+            visited: out.node_pairs_visited,
+        };
+        // The certificate's pop, if it comes during the traversal.
+        let mut pause = query.interior_after.filter(|&k| k > 0);
+        loop {
+            let end = descent.run(
+                &f,
+                ws.queue.stack_vec(),
+                &mut ws.exact,
+                pause,
+                &mut |queued| {
+                    let (found, sum) =
+                        estimate_queued(queued, &mut out.max_pair_probability, &mut best);
+                    found >= query.k_min || sum >= evidence_needed
+                },
+            );
+            out.node_pairs_visited = descent.visited;
+            match end {
+                DescentEnd::Paused => {
+                    pause = None;
+                    match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
+                        Some(true) => return out,
+                        Some(false) => interior_failed = true,
+                        None => {}
+                    }
+                }
+                DescentEnd::Done => break,
+                DescentEnd::Hit { nodes, triangles } => {
+                    out.collides = true;
+                    out.probability = 1.0;
+                    out.max_pair_probability = 1.0;
+                    out.pairs_found += 1;
+                    out.witness = Some(witness(nodes.0, nodes.1, Some(triangles)));
+                    break;
+                }
+                DescentEnd::Budget => {
+                    out.budget_exhausted = true;
+                    break;
+                }
+                DescentEnd::Evidence => {
+                    out.collides = true;
+                    break;
+                }
+            }
+        }
+    }
+    'queue: while !on_demand && let Some(e) = ws.queue.pop() {
         pops += 1;
         unclocked += 1;
-        if query.interior_after == Some(pops) && interior(&mut out) {
-            return out;
+        if query.interior_after == Some(pops) {
+            match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
+                Some(true) => return out,
+                Some(false) => interior_failed = true,
+                None => {}
+            }
         }
         // The root pair is always expanded: a budget cannot end a query before it has looked.
         let over = pops > 1
@@ -550,17 +584,7 @@ pub fn adb_intersects(
             ws.queue.push(e);
             break;
         }
-        if on_demand && pops >= next_evidence_check {
-            next_evidence_check = next_evidence_check.saturating_mul(2);
-            ws.queue.push(e);
-            let (found, sum) = estimate_queued(&mut ws.queue, &mut out, &mut best);
-            if found >= query.k_min || sum >= evidence_needed {
-                out.collides = true;
-                break;
-            }
-            e = ws.queue.pop().expect("the pair just put back");
-        }
-        if (e.a, e.b) != (0, 0) && !on_demand && disjoint_evidence && e.p >= pair_threshold {
+        if (e.a, e.b) != (0, 0) && disjoint_evidence && e.p >= pair_threshold {
             // Replaced by its children: only disjoint pairs count as evidence.
             out.pairs_found -= 1;
             if count_evidence {
@@ -570,25 +594,14 @@ pub fn adb_intersects(
         let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
         if x.is_leaf() && y.is_leaf() {
             // Queued in exact-leaves mode (or the root pair of two single-leaf trees): decide exactly.
-            let mut tests = 0u32;
-            for &t in ma.bvh().triangles_of(x) {
-                let tri_a = ma.mesh().triangle(t as usize).map(|p| p.as_dvec3());
-                for &u in mb.bvh().triangles_of(y) {
-                    let tri_b = ws.exact.cached_triangle(
-                        mb.mesh().triangles()[u as usize],
-                        mb.mesh().positions(),
-                        &rel64,
-                    );
-                    tests += 1;
-                    if triangles_intersect(&tri_a, &tri_b) {
-                        out.collides = true;
-                        out.probability = 1.0;
-                        out.max_pair_probability = 1.0;
-                        out.pairs_found += 1;
-                        out.witness = Some(witness(e.a, e.b, Some(TrianglePair { a: t, b: u })));
-                        break 'queue;
-                    }
-                }
+            let (hit, tests) = leaf_pair_hit((a, x), (b, y), &rel64, &mut ws.exact);
+            if let Some(triangles) = hit {
+                out.collides = true;
+                out.probability = 1.0;
+                out.max_pair_probability = 1.0;
+                out.pairs_found += 1;
+                out.witness = Some(witness(e.a, e.b, Some(triangles)));
+                break 'queue;
             }
             unclocked += tests / TRIANGLE_TESTS_PER_POP;
             continue;
@@ -630,18 +643,6 @@ pub fn adb_intersects(
                 let Some(overlap) = frame.overlap_prepared(&first, second) else {
                     continue;
                 };
-                if on_demand {
-                    // Estimated only at the next evidence check, if still queued then.
-                    queued[n_queued] = Entry {
-                        p: UNESTIMATED,
-                        rank: f64::from(overlap.straddle),
-                        a: ia,
-                        b: ib,
-                        center_distance: overlap.center_distance,
-                    };
-                    n_queued += 1;
-                    continue;
-                }
                 let p = estimate(&node_pair(ia, ib, overlap.center_distance));
                 note_estimate(p, ia, ib, &mut out.max_pair_probability, &mut best);
                 if p >= pair_threshold {
@@ -702,7 +703,11 @@ pub fn adb_intersects(
         if on_demand {
             // The queued pairs not estimated yet are estimated now, and the evidence rule
             // applies to them as at the checks.
-            let (found, sum) = estimate_queued(&mut ws.queue, &mut out, &mut best);
+            let (found, sum) = estimate_queued(
+                ws.queue.stack_mut(),
+                &mut out.max_pair_probability,
+                &mut best,
+            );
             out.pairs_found = found;
             out.collides |= found >= query.k_min || sum >= evidence_needed;
         }
@@ -760,4 +765,49 @@ pub fn adb_intersects(
         });
     }
     out
+}
+
+/// The interpenetration certificate both ways ([`InteriorMap::certify_pair`]), `rel` taking
+/// the second mesh's frame to the first's: `Some(true)` when it settled the answer (written to
+/// `out`: a collision with the certificate's confidence, its witness at the sample found
+/// inside), `Some(false)` when it was tried and settled nothing (nothing found, or a confidence
+/// below `query.p_min`), `None` when a mesh has no interior map.
+fn certificate(
+    (a, pose_a): (&AdbTree, &Pose),
+    (b, pose_b): (&AdbTree, &Pose),
+    rel: &Pose,
+    query: &AdbQuery,
+    out: &mut AdbOutcome,
+) -> Option<bool> {
+    let (map_a, map_b) = (a.interior()?, b.interior()?);
+    let (cert, frame_pose) = match InteriorMap::certify_pair(map_a, map_b, rel) {
+        Some(PairCrossing::SecondInFirst(c)) => (c, pose_a),
+        Some(PairCrossing::FirstInSecond(c)) => (c, pose_b),
+        None => return Some(false),
+    };
+    let confidence = if cert.exact {
+        1.0
+    } else {
+        APPROXIMATE_INTERIOR_CONFIDENCE
+    };
+    if confidence < query.p_min {
+        return Some(false);
+    }
+    out.collides = true;
+    out.probability = confidence;
+    out.max_pair_probability = out.max_pair_probability.max(confidence);
+    out.pairs_found += 1;
+    let centre = |tree: &AdbTree, pose: &Pose| {
+        pose.transform_point(tree.collision_mesh().bvh().root_aabb().center())
+    };
+    out.interpenetration = Some(cert);
+    out.witness = Some(ContactWitness {
+        point: frame_pose.transform_point(cert.inside_point),
+        normal: (centre(b, pose_b) - centre(a, pose_a))
+            .try_normalize()
+            .unwrap_or(Vec3::Y),
+        nodes: (0, 0),
+        triangles: None,
+    });
+    Some(true)
 }

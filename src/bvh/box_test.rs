@@ -50,15 +50,27 @@ pub(crate) struct BoxOverlap {
 /// How squarely the interval `[d − r, d + r]` straddles the middle of `[lo, hi]`: the shorter
 /// of its two parts on either side of the middle, over `r`, clamped to `[0, 1]` (0 for NaN);
 /// ½ for an unbounded slab or an empty interval.
+///
+/// Without a branch on the data: which way each test goes is anyone's guess (pairs straddle
+/// or not about half the time), and the mispredictions cost the ADB traversal about a sixth
+/// of its time on non-colliding poses (measured on ogre's `accuracy_vs_time` poses).
 #[inline]
 fn straddle(d: f32, r: f32, lo: f32, hi: f32) -> f32 {
     let middle = 0.5 * (lo + hi);
-    if !(r > 0.0 && middle.is_finite()) {
-        return 0.5;
-    }
     let share = (middle - (d - r)).min((d + r) - middle) / r;
-    // NaN (a NaN centre) counts as no straddle.
-    if share > 0.0 { share.min(1.0) } else { 0.0 }
+    // NaN (a NaN centre) and negative shares count as no straddle (`clamp` would keep the
+    // NaN); `+ 0.0` turns a −0 into +0, so that the ranks compare as they always did.
+    #[allow(clippy::manual_clamp)]
+    let clamped = share.max(0.0).min(1.0) + 0.0;
+    let bounded = r > 0.0 && middle.is_finite();
+    select(bounded, clamped, 0.5)
+}
+
+/// `if take { a } else { b }`, as a bit mask rather than a branch.
+#[inline(always)]
+fn select(take: bool, a: f32, b: f32) -> f32 {
+    let mask = (take as u32).wrapping_neg();
+    f32::from_bits((a.to_bits() & mask) | (b.to_bits() & !mask))
 }
 
 /// A node of the first tree prepared for box tests ([`RelativeFrame::prepare_first`]).
@@ -317,6 +329,13 @@ mod tests {
         assert_eq!(straddle(1.0, 1.0, f32::NEG_INFINITY, f32::INFINITY), 0.5);
         assert_eq!(straddle(1.0, 0.0, 0.0, 2.0), 0.5);
         assert_eq!(straddle(f32::NAN, 1.0, 0.0, 2.0), 0.0);
+        assert_eq!(straddle(1.0, f32::NAN, 0.0, 2.0), 0.5);
+        // No straddle is +0, never −0 (ranks compare with `total_cmp`).
+        for (d, lo, hi) in [(2.0, -1.0, 1.0), (-3.0, -1.0, 1.0), (f32::NAN, -1.0, 1.0)] {
+            assert_eq!(straddle(d, 1.0, lo, hi).to_bits(), 0);
+        }
+        // A share of −0 (the middle −0, the interval's end +0).
+        assert_eq!(straddle(1.0, 1.0, -0.0, -0.0).to_bits(), 0);
     }
 
     /// The combined test answers as the box test alone when the slabs are unbounded, with the

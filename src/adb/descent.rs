@@ -1,0 +1,216 @@
+//! The default traversal of [`adb_intersects`](super::adb_intersects): depth first in
+//! [`Order::Straddle`](super::Order::Straddle), exact leaves, and estimates only where the
+//! answer needs them (at the evidence checks and for the confidence of an answer it did not
+//! settle). With no estimate to make between two checks, each step is a box test and a
+//! stack push: this loop does only that, and hands everything else back to its caller.
+use std::time::Instant;
+
+use super::queue::Entry;
+use super::traverse::{Budget, TIME_CHECK_INTERVAL, UNESTIMATED};
+use super::tree::{AdbTree, prepare_first, prepare_second};
+use crate::bvh::box_test::RelativeFrame;
+use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
+use crate::geometry::{PoseF64, triangles_intersect};
+
+/// Triangle tests that count as one pop toward the time budget's clock check.
+pub(super) const TRIANGLE_TESTS_PER_POP: u32 = 4;
+
+/// Both trees, the second placed in the first's frame, and the query's budget.
+pub(super) struct DescentFrame<'t> {
+    pub a: &'t AdbTree,
+    pub b: &'t AdbTree,
+    pub frame: &'t RelativeFrame,
+    pub rel64: &'t PoseF64,
+    pub budget: Budget,
+    /// When the query began (read only for a time budget).
+    pub start: Option<Instant>,
+}
+
+/// Why [`Descent::run`] stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum DescentEnd {
+    /// No node pair is left: no leaf pair holds intersecting triangles.
+    Done,
+    /// The leaf pair `nodes` holds the intersecting triangle pair `triangles`.
+    Hit {
+        nodes: (u32, u32),
+        triangles: TrianglePair,
+    },
+    /// The budget ran out (the pair about to be expanded is queued again).
+    Budget,
+    /// The evidence check said to stop.
+    Evidence,
+    /// The pop to pause at came (the pair about to be expanded is queued again, and the pop
+    /// not counted).
+    Paused,
+}
+
+/// A depth-first descent's counters, kept across pauses.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Descent {
+    /// Pairs popped.
+    pub pops: u32,
+    /// Work since the last clock read, in pops (a leaf pair's triangle tests count too).
+    pub unclocked: u32,
+    /// The pop at which the evidence is checked next (doubling after each check).
+    pub next_check: u32,
+    /// Node pairs whose boxes were tested (the root pair counts).
+    pub visited: u64,
+}
+
+impl Descent {
+    /// Expands the pairs of `stack` depth first, children in straddle order (the most
+    /// squarely straddling popped first), until one of [`DescentEnd`]. `evidence` is asked at
+    /// the checks (with the pair about to be expanded queued again) whether to stop;
+    /// `pause_at` is a pop at which to hand back before expanding.
+    pub(super) fn run(
+        &mut self,
+        f: &DescentFrame<'_>,
+        stack: &mut Vec<Entry>,
+        cache: &mut QueryWorkspace,
+        pause_at: Option<u32>,
+        evidence: &mut dyn FnMut(&mut [Entry]) -> bool,
+    ) -> DescentEnd {
+        let (ma, mb) = (f.a.collision_mesh(), f.b.collision_mesh());
+        let (na, nb) = (ma.bvh().nodes(), mb.bvh().nodes());
+        while let Some(e) = stack.pop() {
+            self.pops += 1;
+            self.unclocked += 1;
+            if pause_at == Some(self.pops) {
+                stack.push(e);
+                self.pops -= 1;
+                self.unclocked -= 1;
+                return DescentEnd::Paused;
+            }
+            // The root pair is always expanded: a budget cannot end a query before it has
+            // looked.
+            if self.pops > 1 && self.over_budget(f) {
+                stack.push(e);
+                return DescentEnd::Budget;
+            }
+            if self.pops >= self.next_check {
+                self.next_check = self.next_check.saturating_mul(2);
+                stack.push(e);
+                if evidence(stack) {
+                    return DescentEnd::Evidence;
+                }
+                stack.pop();
+            }
+            let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
+            if x.is_leaf() && y.is_leaf() {
+                let (hit, tests) = leaf_pair_hit((f.a, x), (f.b, y), f.rel64, cache);
+                if let Some(triangles) = hit {
+                    return DescentEnd::Hit {
+                        nodes: (e.a, e.b),
+                        triangles,
+                    };
+                }
+                self.unclocked += tests / TRIANGLE_TESTS_PER_POP;
+                continue;
+            }
+            let (kids, n) = self.overlapping_children(f, (x, e.a), (y, e.b));
+            stack.extend_from_slice(&kids[..n]);
+        }
+        DescentEnd::Done
+    }
+
+    /// Whether the budget is spent (the clock is read every [`TIME_CHECK_INTERVAL`] pops).
+    #[inline]
+    fn over_budget(&mut self, f: &DescentFrame<'_>) -> bool {
+        match f.budget {
+            Budget::Unlimited => false,
+            Budget::NodePairs(n) => self.visited >= n,
+            Budget::Time(t) => {
+                self.unclocked >= TIME_CHECK_INTERVAL && {
+                    self.unclocked = 0;
+                    f.start.is_some_and(|s| s.elapsed() >= t)
+                }
+            }
+        }
+    }
+
+    /// The child pairs of `(x, y)` whose boxes and slabs may overlap (a leaf stands for
+    /// itself), not estimated, in push order: least squarely straddling first.
+    #[inline]
+    fn overlapping_children(
+        &mut self,
+        f: &DescentFrame<'_>,
+        (x, ia): (&BvhNode, u32),
+        (y, ib): (&BvhNode, u32),
+    ) -> ([Entry; 4], usize) {
+        let children = |n: &BvhNode, i: u32| {
+            if n.is_leaf() {
+                [i, u32::MAX]
+            } else {
+                [n.left(), n.left() + 1]
+            }
+        };
+        let (kids_a, kids_b) = (children(x, ia), children(y, ib));
+        // Each child of the second node prepared once for its (up to) two box tests.
+        let prepare = |ib: u32| (ib != u32::MAX).then(|| prepare_second(f.b, f.frame, ib));
+        let prepared_b = [prepare(kids_b[0]), prepare(kids_b[1])];
+        let mut kids = [Entry::default(); 4];
+        let mut n = 0;
+        for ca in kids_a {
+            if ca == u32::MAX {
+                continue;
+            }
+            let first = prepare_first(f.a, f.frame, ca);
+            for (&cb, second) in kids_b.iter().zip(&prepared_b) {
+                let Some(second) = second else {
+                    continue;
+                };
+                self.visited += 1;
+                let Some(overlap) = f.frame.overlap_prepared(&first, second) else {
+                    continue;
+                };
+                // Insertion into the (at most four) sorted so far. The centre distance is
+                // left for the estimate to work out, if the pair is ever estimated (most are
+                // expanded first): a square root per pair saved.
+                let kid = Entry {
+                    p: UNESTIMATED,
+                    rank: f64::from(overlap.straddle),
+                    a: ca,
+                    b: cb,
+                    center_distance: f32::NAN,
+                };
+                let mut at = n;
+                while at > 0 && kids[at - 1] > kid {
+                    kids[at] = kids[at - 1];
+                    at -= 1;
+                }
+                kids[at] = kid;
+                n += 1;
+            }
+        }
+        (kids, n)
+    }
+}
+
+/// The exact test of a leaf pair: the first intersecting triangle pair, if any, and how many
+/// triangle pairs were tested.
+#[inline]
+pub(super) fn leaf_pair_hit(
+    (a, x): (&AdbTree, &BvhNode),
+    (b, y): (&AdbTree, &BvhNode),
+    rel64: &PoseF64,
+    cache: &mut QueryWorkspace,
+) -> (Option<TrianglePair>, u32) {
+    let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
+    let mut tests = 0u32;
+    for &t in ma.bvh().triangles_of(x) {
+        let tri_a = ma.mesh().triangle(t as usize).map(|p| p.as_dvec3());
+        for &u in mb.bvh().triangles_of(y) {
+            let tri_b = cache.cached_triangle(
+                mb.mesh().triangles()[u as usize],
+                mb.mesh().positions(),
+                rel64,
+            );
+            tests += 1;
+            if triangles_intersect(&tri_a, &tri_b) {
+                return (Some(TrianglePair { a: t, b: u }), tests);
+            }
+        }
+    }
+    (None, tests)
+}
