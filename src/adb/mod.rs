@@ -39,7 +39,8 @@ pub use estimator::{
 };
 pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
 pub use interior::{
-    CERTIFY_CHUNK, InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, SampleLookup,
+    CERTIFY_CHUNK, InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, PairLookup,
+    SampleLookup,
 };
 pub use traverse::{
     APPROXIMATE_INTERIOR_CONFIDENCE, AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness,

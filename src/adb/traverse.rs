@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::descent::{Descent, DescentEnd, DescentFrame, TRIANGLE_TESTS_PER_POP, leaf_pair_hit};
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
-use super::interior::{InteriorMap, Interpenetration, PairCrossing};
+use super::interior::{InteriorMap, Interpenetration, PairCrossing, PairLookup};
 use super::queue::{Entry, Queue};
 use super::tree::{AdbTree, nodes_overlap, overlap_distance, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
@@ -371,11 +371,13 @@ pub fn adb_intersects(
     // The certificate comes first by default, before anything the traversal needs is set up:
     // a certified answer costs the certificate alone. (A sample it finds inside the other mesh
     // lies in both root boxes, so it never certifies a pose whose root boxes are apart.)
+    // Whether it found the pose probably apart ([`PairLookup::Apart`]).
+    let mut apart = false;
     if query.interior_after == Some(0) {
         match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
-            Some(true) => return out,
-            Some(false) => interior_failed = true,
-            None => {}
+            Certificate::Settled => return out,
+            Certificate::Failed { apart: far } => (interior_failed, apart) = (true, far),
+            Certificate::Unavailable => {}
         }
     }
     let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
@@ -427,11 +429,18 @@ pub fn adb_intersects(
         }
         _ => f64::INFINITY,
     };
-    let pair_threshold = if disjoint_evidence {
-        let independent = f64::from(query.k_min.max(1)) / EVIDENCE_REDUNDANCY;
-        1.0 - (1.0 - query.p_min.clamp(0.0, 1.0)).powf(1.0 / independent.max(1.0))
-    } else {
-        query.p_min
+    // Worked out when first needed (a `powf`): an answer that leaves no queued pair to weigh
+    // (most non-colliding ones) never needs it.
+    let pair_threshold_cell = std::cell::OnceCell::new();
+    let pair_threshold = || {
+        *pair_threshold_cell.get_or_init(|| {
+            if disjoint_evidence {
+                let independent = f64::from(query.k_min.max(1)) / EVIDENCE_REDUNDANCY;
+                1.0 - (1.0 - query.p_min.clamp(0.0, 1.0)).powf(1.0 / independent.max(1.0))
+            } else {
+                query.p_min
+            }
+        })
     };
     // Estimate a pair only when its estimate is needed: with exact leaves, no pruning and
     // disjoint evidence, a `Straddle` traversal needs the probabilities of its queued pairs
@@ -465,7 +474,13 @@ pub fn adb_intersects(
     let mut pops = 0u32;
     // Work since the last clock read, in pops (a leaf pair's triangle tests count too).
     let mut unclocked = 0u32;
-    ws.queue.reset(query.order, pair_threshold);
+    // The evidence bar matters to `Order::EvidenceFirst` only.
+    let evidence_bar = if query.order == Order::EvidenceFirst {
+        pair_threshold()
+    } else {
+        0.0
+    };
+    ws.queue.reset(query.order, evidence_bar);
     ws.queue.push(Entry {
         p: 1.0,
         rank: 1.0,
@@ -491,7 +506,7 @@ pub fn adb_intersects(
                 e.p = estimate(&node_pair(e.a, e.b, d));
                 note_estimate(e.p, e.a, e.b, max_p, best);
             }
-            if e.p >= pair_threshold && (e.a, e.b) != (0, 0) {
+            if e.p >= pair_threshold() && (e.a, e.b) != (0, 0) {
                 found += 1;
                 sum -= (1.0 - e.p).ln();
             }
@@ -512,6 +527,11 @@ pub fn adb_intersects(
             unclocked: 0,
             next_check: FIRST_EVIDENCE_CHECK,
             visited: out.node_pairs_visited,
+            // Where the certificate found the pose probably apart, the order buys nothing:
+            // with no budget to cut the traversal short, every overlapping pair is expanded
+            // whatever the order. (Under a budget, the order decides what the frontier looks
+            // like when the budget ends: kept.)
+            ordered: !(apart && query.budget == Budget::Unlimited),
         };
         // The certificate's pop, if it comes during the traversal.
         let mut pause = query.interior_after.filter(|&k| k > 0);
@@ -532,9 +552,12 @@ pub fn adb_intersects(
                 DescentEnd::Paused => {
                     pause = None;
                     match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
-                        Some(true) => return out,
-                        Some(false) => interior_failed = true,
-                        None => {}
+                        Certificate::Settled => return out,
+                        Certificate::Failed { apart } => {
+                            interior_failed = true;
+                            descent.ordered = !(apart && query.budget == Budget::Unlimited);
+                        }
+                        Certificate::Unavailable => {}
                     }
                 }
                 DescentEnd::Done => break,
@@ -558,13 +581,14 @@ pub fn adb_intersects(
         }
     }
     'queue: while !on_demand && let Some(e) = ws.queue.pop() {
+        let pair_threshold = pair_threshold();
         pops += 1;
         unclocked += 1;
         if query.interior_after == Some(pops) {
             match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
-                Some(true) => return out,
-                Some(false) => interior_failed = true,
-                None => {}
+                Certificate::Settled => return out,
+                Certificate::Failed { .. } => interior_failed = true,
+                Certificate::Unavailable => {}
             }
         }
         // The root pair is always expanded: a budget cannot end a query before it has looked.
@@ -749,7 +773,7 @@ pub fn adb_intersects(
                 for e in ws
                     .queue
                     .iter()
-                    .filter(|e| e.p >= pair_threshold && (e.a, e.b) != (0, 0))
+                    .filter(|e| e.p >= pair_threshold() && (e.a, e.b) != (0, 0))
                 {
                     let w = witness(e.a, e.b, None);
                     region.0 += w.point * e.p as f32;
@@ -767,23 +791,36 @@ pub fn adb_intersects(
     out
 }
 
-/// The interpenetration certificate both ways ([`InteriorMap::certify_pair`]), `rel` taking
-/// the second mesh's frame to the first's: `Some(true)` when it settled the answer (written to
-/// `out`: a collision with the certificate's confidence, its witness at the sample found
-/// inside), `Some(false)` when it was tried and settled nothing (nothing found, or a confidence
-/// below `query.p_min`), `None` when a mesh has no interior map.
+/// What [`certificate`] did.
+enum Certificate {
+    /// It settled the answer.
+    Settled,
+    /// It was tried and settled nothing (nothing found, or a confidence below `p_min`);
+    /// `apart` when it found the pose probably apart ([`PairLookup::Apart`]).
+    Failed { apart: bool },
+    /// A mesh has no interior map.
+    Unavailable,
+}
+
+/// The interpenetration certificate both ways ([`InteriorMap::look_up_pair`]), `rel` taking
+/// the second mesh's frame to the first's. When it settles the answer, the answer is written
+/// to `out`: a collision with the certificate's confidence, its witness at the sample found
+/// inside.
 fn certificate(
     (a, pose_a): (&AdbTree, &Pose),
     (b, pose_b): (&AdbTree, &Pose),
     rel: &Pose,
     query: &AdbQuery,
     out: &mut AdbOutcome,
-) -> Option<bool> {
-    let (map_a, map_b) = (a.interior()?, b.interior()?);
-    let (cert, frame_pose) = match InteriorMap::certify_pair(map_a, map_b, rel) {
-        Some(PairCrossing::SecondInFirst(c)) => (c, pose_a),
-        Some(PairCrossing::FirstInSecond(c)) => (c, pose_b),
-        None => return Some(false),
+) -> Certificate {
+    let (Some(map_a), Some(map_b)) = (a.interior(), b.interior()) else {
+        return Certificate::Unavailable;
+    };
+    let (cert, frame_pose) = match InteriorMap::look_up_pair(map_a, map_b, rel) {
+        PairLookup::Crossing(PairCrossing::SecondInFirst(c)) => (c, pose_a),
+        PairLookup::Crossing(PairCrossing::FirstInSecond(c)) => (c, pose_b),
+        PairLookup::Apart => return Certificate::Failed { apart: true },
+        PairLookup::Undecided => return Certificate::Failed { apart: false },
     };
     let confidence = if cert.exact {
         1.0
@@ -791,7 +828,7 @@ fn certificate(
         APPROXIMATE_INTERIOR_CONFIDENCE
     };
     if confidence < query.p_min {
-        return Some(false);
+        return Certificate::Failed { apart: false };
     }
     out.collides = true;
     out.probability = confidence;
@@ -809,5 +846,5 @@ fn certificate(
         nodes: (0, 0),
         triangles: None,
     });
-    Some(true)
+    Certificate::Settled
 }

@@ -177,7 +177,7 @@ impl RelativeFrame {
     /// box straddles the other node's slab; `None` if not. The box test is
     /// [`overlap`](Self::overlap)'s, with the same arithmetic (the same answer and centre
     /// distance to the bit), then the two slab tests.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn overlap_prepared(&self, a: &FirstBox, b: &SecondBox) -> Option<BoxOverlap> {
         let t = b.center_in_first - a.center;
         // `separated` in SIMD form.
