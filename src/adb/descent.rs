@@ -6,6 +6,7 @@
 use std::time::Instant;
 
 use super::queue::Entry;
+use super::sample_lookup::prefetch;
 use super::traverse::{Budget, TIME_CHECK_INTERVAL, UNESTIMATED};
 use super::tree::{AdbTree, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
@@ -191,6 +192,8 @@ impl Descent {
                     // Unordered, the straddle is never read (nor, inlined, worked out).
                     unordered[n_unordered] = unestimated(ca, cb, 0.0);
                     n_unordered += 1;
+                    prefetch_children(f.a, ca);
+                    prefetch_children(f.b, cb);
                 }
             }
         }
@@ -209,6 +212,22 @@ impl Descent {
             n += 1;
         }
         (kids, n)
+    }
+}
+
+/// Asks for the children of node `i` of `tree` (their boxes and slabs) to be brought into the
+/// cache, for when the pair is expanded: on the largest meshes the nodes do not stay cached
+/// from one query to the next, and the next pair's loads would otherwise wait on memory.
+/// (In index order only: measured on ogre's non-colliding poses, about 3 % faster there, and
+/// slower in straddle order, where the extra loads sit on the path to the next pop.)
+#[inline]
+fn prefetch_children(tree: &AdbTree, i: u32) {
+    let nodes = tree.collision_mesh().bvh().nodes();
+    let n = &nodes[i as usize];
+    if !n.is_leaf() {
+        let left = n.left() as usize;
+        prefetch(nodes.as_ptr().wrapping_add(left).cast());
+        prefetch(tree.nodes().as_ptr().wrapping_add(left).cast());
     }
 }
 

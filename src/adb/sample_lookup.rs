@@ -57,12 +57,7 @@ impl<'a> Lookup<'a> {
     /// Looks the support chunk up: the samples that lead towards the other mesh (from this
     /// mesh's box centre to the other's).
     pub(super) fn support(&mut self) -> Option<usize> {
-        let towards = self
-            .to_other
-            .inverse()
-            .transform_point(self.other.samples.centre)
-            - self.samples.centre;
-        let leading = self.samples.support_chunk(towards)?;
+        let leading = self.leading_chunk()?;
         // Leading samples come near the other surface on every pose close to contact: whether
         // one did says nothing of whether the spread samples will find a crossing.
         let touched = self.touched;
@@ -74,6 +69,18 @@ impl<'a> Lookup<'a> {
         }
         self.touched = touched;
         found
+    }
+
+    /// The chunk of samples that lead towards the other mesh (from this mesh's box centre to
+    /// the other's), if any.
+    #[inline]
+    pub(super) fn leading_chunk(&self) -> Option<usize> {
+        let towards = self
+            .to_other
+            .inverse()
+            .transform_point(self.other.samples.centre)
+            - self.samples.centre;
+        self.samples.support_chunk(towards)
     }
 
     /// Looks the coarse samples up, then the refinement of every coarse chunk that came into
@@ -220,7 +227,7 @@ impl<'a> Lookup<'a> {
 /// Asks the CPU to bring the byte at `byte` into the cache (a hint: no effect on the result,
 /// nothing read, whatever the address; nothing on targets without the instruction).
 #[inline(always)]
-fn prefetch(byte: *const u8) {
+pub(super) fn prefetch(byte: *const u8) {
     #[cfg(target_arch = "x86_64")]
     // SAFETY: a prefetch never faults, whatever the address, and reads nothing the program
     // sees; SSE is part of the x86_64 baseline.
