@@ -67,7 +67,8 @@ pub(super) struct Descent {
 
 impl Descent {
     /// Expands the pairs of `stack` depth first, children in straddle order (the most
-    /// squarely straddling popped first), until one of [`DescentEnd`]. `evidence` is asked at
+    /// squarely straddling popped first) or, unless [`Descent::ordered`], in index order,
+    /// until one of [`DescentEnd`]. `evidence` is asked at
     /// the checks (with the pair about to be expanded queued again) whether to stop;
     /// `pause_at` is a pop at which to hand back before expanding.
     pub(super) fn run(
@@ -142,7 +143,7 @@ impl Descent {
 
     /// The child pairs of `(x, y)` whose boxes and slabs may overlap (a leaf stands for
     /// itself), not estimated, in push order: with `ORDERED`, least squarely straddling
-    /// first, else last child pair first (all ranked 0).
+    /// first; without, in index order (so the last child pair is popped first), all ranked 0.
     #[inline]
     fn overlapping_children<const ORDERED: bool>(
         &mut self,
@@ -163,8 +164,8 @@ impl Descent {
         let prepared_b = [prepare(kids_b[0]), prepare(kids_b[1])];
         // Per child pair `g` (its first child's slot, then its second's: the order in which
         // `Entry`'s tie-break ranks them, last first), a sort key: 0 if its boxes are apart,
-        // else 1 + its straddle's bits (a non-negative `f32`: the bits order as the values)
-        // and the tie-break below them. Sorted without a branch on the data, which would be
+        // else 1 + its straddle's bits (a non-negative `f32`: the bits order as the values; at
+        // most 1.0, so they still fit shifted by two) and the tie-break below them. Sorted without a branch on the data, which would be
         // mispredicted about one pop in two.
         let mut keys = [0u32; 4];
         let mut pairs = [(0u32, 0u32); 4];

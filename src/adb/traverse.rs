@@ -366,6 +366,11 @@ pub fn adb_intersects(
     if !rel.is_finite() {
         return out;
     }
+    // Root spheres apart (a few flops): the pair is apart, with no certificate to try. (The
+    // root boxes are tested exactly once the certificate has had its turn.)
+    if root_spheres_apart(a, b, &rel) {
+        return out;
+    }
     // Whether the interpenetration certificate was tried and settled nothing.
     let mut interior_failed = false;
     // The certificate comes first by default, before anything the traversal needs is set up:
@@ -847,4 +852,65 @@ fn certificate(
         triangles: None,
     });
     Certificate::Settled
+}
+
+/// Whether the spheres around the two root boxes (`rel` taking the second tree's frame to the
+/// first's) are apart, with a margin for rounding: then so are the boxes, and the meshes.
+#[inline]
+fn root_spheres_apart(a: &AdbTree, b: &AdbTree, rel: &Pose) -> bool {
+    let (ba, bb) = (
+        a.collision_mesh().bvh().root_aabb(),
+        b.collision_mesh().bvh().root_aabb(),
+    );
+    let reach = ba.half_extents().length() + bb.half_extents().length();
+    let gap = rel.transform_point(bb.center()).distance(ba.center());
+    // Relative to the scene's scale, far above `f32` rounding; NaN (empty or non-finite
+    // boxes) never separates.
+    let scale = ba.max_abs() + bb.max_abs() + rel.translation.abs().max_element();
+    gap > reach + scale * 1e-4
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bvh::{CollisionMesh, root_boxes_overlap};
+    use crate::mesh::generate;
+    use glam::Quat;
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+
+    /// The root-sphere test only ever rejects pairs whose root boxes are apart, and does
+    /// reject most pairs far apart.
+    #[test]
+    fn root_spheres_apart_only_when_the_root_boxes_are() {
+        let a = AdbTree::new(CollisionMesh::new(generate::torus(1.0, 0.3, 24, 8)));
+        let b = AdbTree::new(CollisionMesh::new(generate::cuboid(
+            Vec3::new(2.0, 0.2, 0.5),
+            1,
+        )));
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+        let (mut rejected, mut far) = (0, 0);
+        for _ in 0..4000 {
+            let axis = Vec3::new(rng.random(), rng.random(), rng.random()) - 0.5;
+            let rotation = Quat::from_axis_angle(
+                axis.try_normalize().unwrap_or(Vec3::X),
+                rng.random::<f32>() * 6.3,
+            );
+            let t = (Vec3::new(rng.random(), rng.random(), rng.random()) - 0.5) * 10.0;
+            let rel = Pose::new(t, rotation);
+            let apart = root_spheres_apart(&a, &b, &rel);
+            let overlap = root_boxes_overlap(
+                a.collision_mesh(),
+                &Pose::IDENTITY,
+                b.collision_mesh(),
+                &rel,
+            );
+            assert!(!(apart && overlap), "{rel:?}");
+            if t.length() > 4.0 {
+                far += 1;
+                rejected += usize::from(apart);
+            }
+        }
+        assert!(rejected * 10 >= far * 9, "{rejected} of {far}");
+    }
 }
