@@ -52,8 +52,9 @@ pub(crate) struct BoxOverlap {
 /// ½ for an unbounded slab or an empty interval.
 ///
 /// Without a branch on the data: which way each test goes is anyone's guess (pairs straddle
-/// or not about half the time), and the mispredictions cost the ADB traversal about a sixth
-/// of its time on non-colliding poses (measured on ogre's `accuracy_vs_time` poses).
+/// or not about half the time), and the mispredictions cost the ADB traversal about 7 % of its
+/// time on ogre's non-colliding `accuracy_vs_time` poses (1.78 µs against 1.66 µs, median, in a
+/// tight loop during development).
 #[inline]
 fn straddle(d: f32, r: f32, lo: f32, hi: f32) -> f32 {
     let middle = 0.5 * (lo + hi);
@@ -177,7 +178,7 @@ impl RelativeFrame {
     /// box straddles the other node's slab; `None` if not. The box test is
     /// [`overlap`](Self::overlap)'s, with the same arithmetic (the same answer and centre
     /// distance to the bit), then the two slab tests.
-    #[inline(always)]
+    #[inline]
     pub(crate) fn overlap_prepared(&self, a: &FirstBox, b: &SecondBox) -> Option<BoxOverlap> {
         let t = b.center_in_first - a.center;
         // `separated` in SIMD form.
