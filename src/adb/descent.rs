@@ -92,7 +92,7 @@ impl Descent {
             }
             // The root pair is always expanded: a budget cannot end a query before it has
             // looked.
-            if self.pops > 1 && self.over_budget(f) {
+            if self.pops > 1 && budget_spent(f.budget, self.visited, &mut self.unclocked, f.start) {
                 stack.push(e);
                 return DescentEnd::Budget;
             }
@@ -124,21 +124,6 @@ impl Descent {
             stack.extend_from_slice(&kids[..n]);
         }
         DescentEnd::Done
-    }
-
-    /// Whether the budget is spent (the clock is read every [`TIME_CHECK_INTERVAL`] pops).
-    #[inline]
-    fn over_budget(&mut self, f: &DescentFrame<'_>) -> bool {
-        match f.budget {
-            Budget::Unlimited => false,
-            Budget::NodePairs(n) => self.visited >= n,
-            Budget::Time(t) => {
-                self.unclocked >= TIME_CHECK_INTERVAL && {
-                    self.unclocked = 0;
-                    f.start.is_some_and(|s| s.elapsed() >= t)
-                }
-            }
-        }
     }
 
     /// The child pairs of `(x, y)` whose boxes and slabs may overlap (a leaf stands for
@@ -213,6 +198,28 @@ impl Descent {
             n += 1;
         }
         (kids, n)
+    }
+}
+
+/// Whether `budget` is spent after `visited` node pairs, `unclocked` pops since the clock was
+/// last read (the clock is read, and `unclocked` reset, every [`TIME_CHECK_INTERVAL`] pops),
+/// for a query begun at `start`.
+#[inline]
+pub(super) fn budget_spent(
+    budget: Budget,
+    visited: u64,
+    unclocked: &mut u32,
+    start: Option<Instant>,
+) -> bool {
+    match budget {
+        Budget::Unlimited => false,
+        Budget::NodePairs(n) => visited >= n,
+        Budget::Time(t) => {
+            *unclocked >= TIME_CHECK_INTERVAL && {
+                *unclocked = 0;
+                start.is_some_and(|s| s.elapsed() >= t)
+            }
+        }
     }
 }
 

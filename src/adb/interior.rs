@@ -332,8 +332,8 @@ impl InteriorMap {
             return PairLookup::Crossing(found_in_first(l, j));
         }
         if second_in_first.as_ref().is_some_and(|l| !l.touched) {
-            // Every spread sample of the second mesh lay outside the first: a pose short of
-            // contact, almost always.
+            // Every spread sample of the second mesh lay outside the first and away from its
+            // surface: most often a pose short of contact.
             return PairLookup::Apart;
         }
         let Some(l) = first_in_second.as_mut() else {
@@ -480,9 +480,9 @@ pub enum PairLookup {
     /// The surfaces cross: a sample inside the other mesh and one of the same surface outside.
     Crossing(PairCrossing),
     /// No crossing, and the second mesh's spread samples all lay outside the first mesh and
-    /// away from its surface: most often a pose short of contact (on ogre's
-    /// `accuracy_vs_time` poses, 26 of the 184 such poses collide, by a part too thin for the
-    /// samples to land in).
+    /// away from its surface: most often a pose short of contact (measured during development
+    /// on ogre's `accuracy_vs_time` poses: 26 of the 184 such poses collide, by a part too thin
+    /// for the samples to land in).
     Apart,
     /// No crossing, and no sign either way (or nothing to look up).
     Undecided,

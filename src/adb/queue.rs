@@ -54,14 +54,10 @@ impl Queue {
         }
     }
 
-    /// The stacked pairs, to update in place (the heap, whose order depends on them, is not
-    /// included: only [`Order::Straddle`] updates its pairs, and it uses only the stack).
-    pub(super) fn stack_vec(&mut self) -> &mut Vec<Entry> {
-        debug_assert!(self.heap.is_empty());
-        &mut self.stack
-    }
-
-    pub(super) fn stack_mut(&mut self) -> &mut [Entry] {
+    /// The stack of pairs, to push and pop directly and to update in place (the heap, whose
+    /// order depends on them, is not included: only [`Order::Straddle`] does either, and it
+    /// uses only the stack).
+    pub(super) fn stack_mut(&mut self) -> &mut Vec<Entry> {
         debug_assert!(self.heap.is_empty());
         &mut self.stack
     }

@@ -4,7 +4,9 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use super::descent::{Descent, DescentEnd, DescentFrame, TRIANGLE_TESTS_PER_POP, leaf_pair_hit};
+use super::descent::{
+    Descent, DescentEnd, DescentFrame, TRIANGLE_TESTS_PER_POP, budget_spent, leaf_pair_hit,
+};
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
 use super::interior::{InteriorMap, Interpenetration, PairCrossing, PairLookup};
 use super::queue::{Entry, Queue};
@@ -519,6 +521,11 @@ pub fn adb_intersects(
         (found, sum)
     };
     if on_demand {
+        // Where the certificate found the pose probably apart, the order buys nothing: with no
+        // budget to cut the traversal short, every overlapping pair is expanded whatever the
+        // order. (Under a budget, the order decides what the frontier looks like when the
+        // budget ends: kept.)
+        let straddle_order = |apart: bool| !(apart && query.budget == Budget::Unlimited);
         let f = DescentFrame {
             a,
             b,
@@ -532,18 +539,14 @@ pub fn adb_intersects(
             unclocked: 0,
             next_check: FIRST_EVIDENCE_CHECK,
             visited: out.node_pairs_visited,
-            // Where the certificate found the pose probably apart, the order buys nothing:
-            // with no budget to cut the traversal short, every overlapping pair is expanded
-            // whatever the order. (Under a budget, the order decides what the frontier looks
-            // like when the budget ends: kept.)
-            ordered: !(apart && query.budget == Budget::Unlimited),
+            ordered: straddle_order(apart),
         };
         // The certificate's pop, if it comes during the traversal.
         let mut pause = query.interior_after.filter(|&k| k > 0);
         loop {
             let end = descent.run(
                 &f,
-                ws.queue.stack_vec(),
+                ws.queue.stack_mut(),
                 &mut ws.exact,
                 pause,
                 &mut |queued| {
@@ -560,7 +563,7 @@ pub fn adb_intersects(
                         Certificate::Settled => return out,
                         Certificate::Failed { apart } => {
                             interior_failed = true;
-                            descent.ordered = !(apart && query.budget == Budget::Unlimited);
+                            descent.ordered = straddle_order(apart);
                         }
                         Certificate::Unavailable => {}
                     }
@@ -597,17 +600,8 @@ pub fn adb_intersects(
             }
         }
         // The root pair is always expanded: a budget cannot end a query before it has looked.
-        let over = pops > 1
-            && match query.budget {
-                Budget::Unlimited => false,
-                Budget::NodePairs(n) => out.node_pairs_visited >= n,
-                Budget::Time(t) => {
-                    unclocked >= TIME_CHECK_INTERVAL && {
-                        unclocked = 0;
-                        start.is_some_and(|s| s.elapsed() >= t)
-                    }
-                }
-            };
+        let over =
+            pops > 1 && budget_spent(query.budget, out.node_pairs_visited, &mut unclocked, start);
         if over {
             out.budget_exhausted = true;
             ws.queue.push(e);
