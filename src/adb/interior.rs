@@ -16,7 +16,10 @@
 //! changes exactly where a path crosses the surface, and the certificate is exact: a voxel is
 //! classified only when no triangle comes near it and the three axis-aligned rays through its
 //! centre agree. For an open mesh (holes, boundary edges) parity depends on the ray: two of the
-//! three rays decide, and the map is an approximation ([`InteriorMap::is_exact`]).
+//! three rays decide, and the map is an approximation ([`InteriorMap::is_exact`]) whose
+//! certificate's confidence is measured ([`InteriorMap::certificate_confidence`]). The
+//! crossings along each ray are decided exactly, whatever the mesh's alignment with the grid
+//! (exact orientation predicates, simulation of simplicity for rays through edges and vertices).
 //!
 //! The samples are vertices, each with its connected component (an inside and an outside
 //! sample must belong to one component), of three kinds ([`SurfaceSamples`]):
@@ -33,9 +36,10 @@
 //! inside it) is settled by one lookup in the map's [`Clearance`] (per block of voxels, the
 //! distance to the nearest voxel not wholly outside, and to the nearest not wholly inside), so
 //! a pose short of contact looks up only the few chunks that come near the other mesh.
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
 use super::clearance::Clearance;
+use super::ray_parity;
 use super::sample_lookup::Lookup;
 use super::surface_samples::SurfaceSamples;
 use super::voxel_grid::VoxelGrid;
@@ -92,6 +96,9 @@ pub struct InteriorMap {
     pub(super) clearance: Clearance,
     /// Per voxel, [`InteriorMap::build_depth_steps`]: a certificate's depth, in voxel steps.
     depth_steps: Vec<u8>,
+    /// The confidence of a certificate found in this map: 1 for an exact map, else as
+    /// measured ([`InteriorMap::certificate_confidence`]).
+    pub(super) certificate_confidence: f64,
 }
 
 /// What [`InteriorMap::certify`] found: a sample of one surface inside the other mesh (and one
@@ -143,17 +150,16 @@ impl InteriorMap {
             samples,
             clearance: Clearance::default(),
             depth_steps: Vec::new(),
+            certificate_confidence: if exact { 1.0 } else { 0.0 },
         };
         let surface = grid.surface_voxels(tri_mesh);
         // Odd parity along each axis, one bit per axis.
-        let mut odd = vec![0u8; voxels];
-        for axis in 0..3 {
-            map.axis_parity(mesh, axis, &mut odd);
-        }
+        let odd = ray_parity::odd_parity(&grid, tri_mesh);
         for i in 0..voxels {
-            // All three rays must agree where parity is the same along every ray (then a
-            // disagreement is a rounding accident); where it is not (an open mesh), two of
-            // three decide, and the map is an approximation anyway.
+            // Where parity is the same along every ray (a closed mesh) the three exact rays
+            // agree on every voxel no triangle comes near; all three must, so a disagreement
+            // leaves the voxel unclassified. Where it is not (an open mesh), two of three
+            // decide, and the map is an approximation.
             let votes = odd[i].count_ones();
             let class = if surface[i] {
                 SURFACE
@@ -180,6 +186,16 @@ impl InteriorMap {
     /// is outside, and [`InteriorMap::certify`] is never wrong. False for open meshes.
     pub fn is_exact(&self) -> bool {
         self.exact
+    }
+
+    /// The confidence a certificate found in this map is given: 1 for an
+    /// [exact](InteriorMap::is_exact) map; for an open mesh's, 0 until measured
+    /// ([`InteriorMap::measure_certificate`], which an [`AdbTree`](super::AdbTree) build does
+    /// by default: [`AdbBuildOptions::certificate_poses`](super::AdbBuildOptions::certificate_poses)),
+    /// then the measured lower bound on its rate of being right. A certificate settles a query
+    /// only where this reaches the query's `p_min`.
+    pub fn certificate_confidence(&self) -> f64 {
+        self.certificate_confidence
     }
 
     /// Voxels along each axis (0 for an empty map).
@@ -393,85 +409,6 @@ impl InteriorMap {
         }
         steps
     }
-
-    /// Sets bit `axis` of `odd` for every voxel whose centre has an odd number of surface
-    /// crossings below it along `axis` (on the ray through the voxel centres of its row).
-    fn axis_parity(&self, mesh: &CollisionMesh, axis: usize, odd: &mut [u8]) {
-        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
-        let dims = self.grid.dims.map(|d| d as usize);
-        let origin = self.grid.origin.as_dvec3();
-        let cell = f64::from(self.grid.cell);
-        let row_centre = |i: usize, k: usize| origin[k] + (i as f64 + 0.5) * cell;
-        // (row, coordinate along the axis) of every crossing.
-        let mut crossings: Vec<(u32, f64)> = Vec::new();
-        for t in 0..mesh.mesh().triangle_count() {
-            let tri: [DVec3; 3] = mesh.mesh().triangle(t).map(|p| p.as_dvec3());
-            let orient = |p: (f64, f64), q: &DVec3, r: &DVec3| {
-                (q[u] - p.0) * (r[v] - p.1) - (q[v] - p.1) * (r[u] - p.0)
-            };
-            let area = orient((tri[0][u], tri[0][v]), &tri[1], &tri[2]);
-            if area == 0.0 || !area.is_finite() {
-                continue; // edge-on: a ray does not pass through it, but along it
-            }
-            let (min_u, max_u) = min_max(tri.map(|p| p[u]));
-            let (min_v, max_v) = min_max(tri.map(|p| p[v]));
-            let first = |min: f64, k: usize| ((min - origin[k]) / cell - 0.5).ceil().max(0.0);
-            let last = |max: f64, k: usize, d: usize| {
-                ((max - origin[k]) / cell - 0.5).floor().min(d as f64 - 1.0)
-            };
-            let (u0, u1) = (first(min_u, u), last(max_u, u, dims[u]));
-            let (v0, v1) = (first(min_v, v), last(max_v, v, dims[v]));
-            if u1 < u0 || v1 < v0 {
-                continue;
-            }
-            for iu in u0 as usize..=u1 as usize {
-                for iv in v0 as usize..=v1 as usize {
-                    let p = (row_centre(iu, u), row_centre(iv, v));
-                    let w = [
-                        orient(p, &tri[1], &tri[2]),
-                        orient(p, &tri[2], &tri[0]),
-                        orient(p, &tri[0], &tri[1]),
-                    ];
-                    let inside = if area > 0.0 {
-                        w.iter().all(|&x| x >= 0.0)
-                    } else {
-                        w.iter().all(|&x| x <= 0.0)
-                    };
-                    if inside {
-                        let along =
-                            (w[0] * tri[0][axis] + w[1] * tri[1][axis] + w[2] * tri[2][axis])
-                                / (w[0] + w[1] + w[2]);
-                        crossings.push(((iu * dims[v] + iv) as u32, along));
-                    }
-                }
-            }
-        }
-        crossings.sort_unstable_by(|x, y| x.0.cmp(&y.0).then(x.1.total_cmp(&y.1)));
-        let stride = |k: usize| match k {
-            0 => 1,
-            1 => dims[0],
-            _ => dims[0] * dims[1],
-        };
-        let bit = 1u8 << axis;
-        let mut start = 0;
-        while start < crossings.len() {
-            let row = crossings[start].0;
-            let end = start + crossings[start..].partition_point(|c| c.0 == row);
-            let (iu, iv) = (row as usize / dims[v], row as usize % dims[v]);
-            let base = iu * stride(u) + iv * stride(v);
-            let mut below = start;
-            for i in 0..dims[axis] {
-                let centre = row_centre(i, axis);
-                while below < end && crossings[below].1 < centre {
-                    below += 1;
-                }
-                if (below - start) % 2 == 1 {
-                    odd[base + i * stride(axis)] |= bit;
-                }
-            }
-            start = end;
-        }
-    }
 }
 
 /// What [`InteriorMap::look_up_pair`] found.
@@ -495,10 +432,6 @@ pub enum PairCrossing {
     SecondInFirst(Interpenetration),
     /// A sample of the first mesh inside the second (its point in the second mesh's frame).
     FirstInSecond(Interpenetration),
-}
-
-fn min_max(x: [f64; 3]) -> (f64, f64) {
-    (x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@
 //!   confidence, whether the budget ran out, and where the contact probably is.
 
 pub mod cells;
+mod certificate_confidence;
 mod clearance;
 mod confidence_fit;
 mod descent;
@@ -24,6 +25,7 @@ mod fit;
 mod interior;
 pub mod probability;
 mod queue;
+mod ray_parity;
 mod sample_lookup;
 mod surface_samples;
 pub mod tables;
@@ -32,6 +34,7 @@ mod tree;
 mod voxel_grid;
 mod voxel_map;
 
+pub use certificate_confidence::CertificateReliability;
 pub use confidence_fit::ConfidenceCalibration;
 pub use estimator::{
     CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator, PlanarityEstimator,
@@ -43,8 +46,7 @@ pub use interior::{
     SampleLookup,
 };
 pub use traverse::{
-    APPROXIMATE_INTERIOR_CONFIDENCE, AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness,
-    Decision, EVIDENCE_REDUNDANCY, FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR,
-    TIME_CHECK_INTERVAL, adb_intersects,
+    AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, EVIDENCE_REDUNDANCY,
+    FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR, TIME_CHECK_INTERVAL, adb_intersects,
 };
 pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};

@@ -107,16 +107,13 @@ pub struct AdbQuery {
     /// "collision" there. `None` never tries it; neither does a query between trees built
     /// without an [`InteriorMap`](super::InteriorMap). With a map that is not
     /// [exact](super::InteriorMap::is_exact) (an open mesh) the certificate's confidence is
-    /// [`APPROXIMATE_INTERIOR_CONFIDENCE`] and it counts only if that reaches `p_min`, so with
-    /// `p_min = 1` the answer stays the exact query's. `Some(0)` (before the traversal) by
+    /// the map's measured [`certificate_confidence`](super::InteriorMap::certificate_confidence)
+    /// and it counts only if that reaches `p_min`, so with `p_min = 1` the answer stays the
+    /// exact query's. `Some(0)` (before the traversal) by
     /// default: on the `accuracy_vs_time` poses, trying it after 2 to 32 pops was slower at
     /// every value (the pops cost the deep overlaps more than the certificate costs the rest).
     pub interior_after: Option<u32>,
 }
-
-/// The confidence of an interpenetration certificate found in the map of an open mesh
-/// ([`AdbQuery::interior_after`]).
-pub const APPROXIMATE_INTERIOR_CONFIDENCE: f64 = 0.99;
 
 /// The order in which [`adb_intersects`] expands node pairs. Whichever the order, the frontier
 /// (every queued, leaf and pruned pair) covers all overlapping leaf pairs, the same rules
@@ -815,18 +812,18 @@ fn certificate(
     let (Some(map_a), Some(map_b)) = (a.interior(), b.interior()) else {
         return Certificate::Unavailable;
     };
-    let (cert, frame_pose) = match InteriorMap::look_up_pair(map_a, map_b, rel) {
-        PairLookup::Crossing(PairCrossing::SecondInFirst(c)) => (c, pose_a),
-        PairLookup::Crossing(PairCrossing::FirstInSecond(c)) => (c, pose_b),
+    // The sample was looked up in the map of the mesh it lies in: that map's confidence.
+    let (cert, frame_pose, confidence) = match InteriorMap::look_up_pair(map_a, map_b, rel) {
+        PairLookup::Crossing(PairCrossing::SecondInFirst(c)) => {
+            (c, pose_a, map_a.certificate_confidence())
+        }
+        PairLookup::Crossing(PairCrossing::FirstInSecond(c)) => {
+            (c, pose_b, map_b.certificate_confidence())
+        }
         PairLookup::Apart => return Certificate::Failed { apart: true },
         PairLookup::Undecided => return Certificate::Failed { apart: false },
     };
-    let confidence = if cert.exact {
-        1.0
-    } else {
-        APPROXIMATE_INTERIOR_CONFIDENCE
-    };
-    if confidence < query.p_min {
+    if confidence < query.p_min || confidence <= 0.0 {
         return Certificate::Failed { apart: false };
     }
     out.collides = true;

@@ -7,6 +7,7 @@ use glam::Vec3;
 use std::sync::Arc;
 
 use super::cells::{CellGrid, CellScratch, count_well_filled};
+use super::certificate_confidence::TRAINING_SEED;
 use super::confidence_fit::ConfidenceCalibration;
 use super::estimator::PlanarityEstimator;
 use super::fit::{Calibration, FitOptions, FittedEstimator};
@@ -50,6 +51,14 @@ pub struct AdbBuildOptions {
     /// slower before the leading samples; with them, 32, 64 and 96 are within the run-to-run
     /// noise of 128 on ogre and stanford-bunny, and 256 is slower.
     pub interior_samples: usize,
+    /// Poses of the mesh against itself on which the build measures how often the
+    /// certificate of an open mesh's map (not [exact](super::InteriorMap::is_exact)) is right
+    /// ([`InteriorMap::measure_certificate`]), for its
+    /// [`certificate_confidence`](super::InteriorMap::certificate_confidence): a certified pose
+    /// costs one exact query. 0 skips the measurement, and then an open mesh's certificate
+    /// never settles a query. 2000 by default: with every certificate right, the bound reaches
+    /// 0.99 once 299 of the poses are certified. Closed meshes are never measured.
+    pub certificate_poses: usize,
 }
 
 impl Default for AdbBuildOptions {
@@ -61,6 +70,7 @@ impl Default for AdbBuildOptions {
             fit: Some(FitOptions::default()),
             interior_resolution: 128,
             interior_samples: 128,
+            certificate_poses: 2000,
         }
     }
 }
@@ -185,7 +195,12 @@ impl AdbTree {
             .collect();
         node_slabs(&mesh, &mut nodes);
         let interior = (options.interior_resolution > 0).then(|| {
-            InteriorMap::build(&mesh, options.interior_resolution, options.interior_samples)
+            let mut map =
+                InteriorMap::build(&mesh, options.interior_resolution, options.interior_samples);
+            if options.certificate_poses > 0 {
+                map.measure_certificate(&mesh, options.certificate_poses, TRAINING_SEED);
+            }
+            map
         });
         let mut tree = Self {
             mesh,

@@ -4,17 +4,19 @@ use glam::{UVec3, Vec3};
 
 use crate::mesh::TriMesh;
 
-/// The grid's origin is moved off the mesh's box by this fraction of a voxel (on top of one
-/// voxel of padding), so that the rays through voxel centres rarely pass exactly through the
-/// vertices or edges of a mesh laid out on a regular grid.
-const GRID_SHIFT: f32 = 0.137_036;
+/// The grid's origin is moved off the mesh's box by these fractions of a voxel (on top of one
+/// voxel of padding), a different one per axis, so that the voxel centres of a mesh laid out
+/// on a regular grid rarely lie on its faces or its diagonals. Only the map's share of
+/// classified voxels depends on it: the parity is exact wherever the rays pass
+/// ([`super::ray_parity`]).
+const GRID_SHIFT: [f32; 3] = [0.137_036, 0.271_828, 0.414_213];
 
 /// Voxels this close to a triangle (as a fraction of a voxel, on top of a relative `f32`
 /// rounding margin) count as touched by it: far more than the rounding of a point's transform,
 /// so a point found in an untouched voxel is on that voxel's side of the surface.
 const SURFACE_MARGIN: f32 = 1e-3;
 
-/// Cubic voxels over a mesh's box, padded by a voxel (and [`GRID_SHIFT`]) on every side, so
+/// Cubic voxels over a mesh's box, padded by a voxel (and the [`GRID_SHIFT`] of its axis) on every side, so
 /// that every point beyond the grid is away from the surface. Voxel `(x, y, z)` is at index
 /// `(z · dims[1] + y) · dims[0] + x`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -49,7 +51,7 @@ impl VoxelGrid {
         }
         let cell = longest / resolution.clamp(1, 1024) as f32;
         Self {
-            origin: aabb.min - Vec3::splat(cell * (1.0 + GRID_SHIFT)),
+            origin: aabb.min - cell * (Vec3::ONE + Vec3::from_array(GRID_SHIFT)),
             cell,
             inv_cell: 1.0 / cell,
             dims: extent
