@@ -1,6 +1,8 @@
 //! Pluggable estimators of the probability that two nodes contain intersecting triangles.
 use super::fit::Calibration;
-use super::probability::{ModelBox, cell_counts, depth_lower_bound, overlap_volume_of};
+use super::probability::{
+    DEFAULT_X_MAX, ModelBox, cell_counts, depth_lower_bound, overlap_volume_of,
+};
 use super::tables::collision_probability_tabled;
 use super::tree::{AdbNode, AdbTree};
 
@@ -68,13 +70,15 @@ pub trait CollisionEstimator: Send + Sync + std::fmt::Debug {
 /// `LB = (d_A + d_B) / (d_maxA + d_maxB)` and `x ≤ x_max`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PaperEstimator {
-    /// Cap on the number of collision cells `x` in Eq. 9 (the papers: 10).
+    /// Cap on the number of collision cells `x` in Eq. 9 (the papers: [`DEFAULT_X_MAX`](super::probability::DEFAULT_X_MAX)).
     pub x_max: u32,
 }
 
 impl Default for PaperEstimator {
     fn default() -> Self {
-        Self { x_max: 10 }
+        Self {
+            x_max: DEFAULT_X_MAX,
+        }
     }
 }
 
@@ -90,7 +94,9 @@ pub struct PlanarityEstimator {
 
 impl Default for PlanarityEstimator {
     fn default() -> Self {
-        Self { x_max: 10 }
+        Self {
+            x_max: DEFAULT_X_MAX,
+        }
     }
 }
 
