@@ -11,14 +11,15 @@ use crate::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use crate::geometry::Pose;
 use crate::poses::random_rotation;
 
-/// Seed of the poses the measurement draws: training poses, distinct from the seeds the
-/// `accuracy_vs_time` report and the tests evaluate on.
+/// Seed of the poses a tree's build measures on: training poses, a seed of their own (the
+/// `accuracy_vs_time` report evaluates on other seeds).
 pub(super) const TRAINING_SEED: u64 = 0x0CE7_7A11;
 
 /// One-sided level of the lower confidence bound the measurement reports.
 const LOWER_BOUND_LEVEL: f64 = 0.95;
 
-/// What [`measure`] found: how often an approximate certificate was right.
+/// What [`InteriorMap::measure_certificate`] found: how often an approximate certificate was
+/// right.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct CertificateReliability {
     /// Poses tried.
