@@ -9,19 +9,14 @@ use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::{TriMesh, generate};
 
-/// `mesh` with every vertex moved by `offset`.
-fn moved(mesh: &TriMesh, offset: Vec3) -> TriMesh {
-    let positions = mesh.positions().iter().map(|&p| p + offset).collect();
-    TriMesh::new(positions, mesh.triangles().to_vec()).expect("valid mesh")
-}
-
 #[test]
 fn a_box_nested_in_a_box_is_not_a_collision() {
     let outer = AdbTree::new(CollisionMesh::new(generate::cuboid(Vec3::ONE, 0)));
-    let inner = AdbTree::new(CollisionMesh::new(moved(
-        &generate::cuboid(Vec3::splat(0.2), 2),
-        Vec3::splat(0.5),
-    )));
+    let inner = AdbTree::new(CollisionMesh::new(
+        generate::cuboid(Vec3::splat(0.2), 2)
+            .translated(Vec3::splat(0.5))
+            .unwrap(),
+    ));
     let mut ws = AdbWorkspace::new();
     let mut exact_ws = QueryWorkspace::new();
     for p_min in [0.99, 1.0] {

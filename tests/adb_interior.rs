@@ -17,22 +17,6 @@ use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::{TriMesh, generate};
 use stochastic_collision::poses::near_contact_poses;
 
-/// `mesh` with every vertex moved by `offset`.
-fn moved(mesh: &TriMesh, offset: Vec3) -> TriMesh {
-    let positions = mesh.positions().iter().map(|&p| p + offset).collect();
-    TriMesh::new(positions, mesh.triangles().to_vec()).expect("valid mesh")
-}
-
-/// The union of two meshes' triangle lists (no welding).
-fn merged(a: &TriMesh, b: &TriMesh) -> TriMesh {
-    let mut positions = a.positions().to_vec();
-    positions.extend_from_slice(b.positions());
-    let n = a.vertex_count() as u32;
-    let mut triangles = a.triangles().to_vec();
-    triangles.extend(b.triangles().iter().map(|t| t.map(|v| v + n)));
-    TriMesh::new(positions, triangles).expect("valid mesh")
-}
-
 /// Checks the map of `mesh` against exact ray parity at `count` seeded random points of its
 /// box (grown by 10 %); returns the share of points the map classifies.
 fn check_against_parity(name: &str, mesh: &CollisionMesh, map: &InteriorMap, count: usize) -> f64 {
@@ -68,7 +52,11 @@ fn the_map_agrees_with_exact_parity_on_closed_meshes() {
         // sound (a path from odd to even parity crosses the surface).
         (
             "overlapping balls",
-            merged(&ball, &moved(&ball, Vec3::new(0.8, 0.1, 0.0))),
+            TriMesh::merged(&[
+                ball.clone(),
+                ball.translated(Vec3::new(0.8, 0.1, 0.0)).unwrap(),
+            ])
+            .unwrap(),
         ),
     ];
     for (name, mesh) in meshes {
@@ -211,7 +199,11 @@ fn certificate_is_sound(
 #[test]
 fn the_certificate_is_sound_and_settles_most_deep_overlaps_on_generated_meshes() {
     let ball = generate::icosphere(1.0, 3);
-    let pair = merged(&ball, &moved(&ball, Vec3::new(3.0, 0.0, 0.0)));
+    let pair = TriMesh::merged(&[
+        ball.clone(),
+        ball.translated(Vec3::new(3.0, 0.0, 0.0)).unwrap(),
+    ])
+    .unwrap();
     let meshes = [
         ("icosphere", CollisionMesh::new(ball.clone())),
         (

@@ -19,6 +19,9 @@ use crate::mesh::TriMesh;
 /// Rows (in row units) by which a triangle's box is widened before rows are tested exactly.
 const ROW_SLACK: f64 = 1e-6;
 
+/// A triangle's edges as vertex pairs, each opposite the vertex of the same index.
+const EDGES: [(usize, usize); 3] = [(1, 2), (2, 0), (0, 1)];
+
 /// For every voxel of `grid`, bit `axis` set when the ray along `axis` through the voxel
 /// centres of its row crosses `mesh` an odd number of times below the voxel's centre (see the
 /// module documentation). A voxel whose centre is within rounding of the surface may get
@@ -70,19 +73,15 @@ fn axis_parity(grid: &VoxelGrid, mesh: &TriMesh, axis: usize, odd: &mut [u8]) {
             continue;
         }
         let positive = area > 0.0;
+        let (lo, hi) = min_max(tri.map(|p| p[axis]));
         for iu in u0..=u1 as usize {
             for iv in v0..=v1 as usize {
                 let p = Coord {
                     x: row_centre(iu, u),
                     y: row_centre(iv, v),
                 };
-                let w = [
-                    orient2d(p, flat[1], flat[2]),
-                    orient2d(p, flat[2], flat[0]),
-                    orient2d(p, flat[0], flat[1]),
-                ];
-                let edges = [(1, 2), (2, 0), (0, 1)];
-                let inside = w.iter().zip(edges).all(|(&w, (q, r))| {
+                let w = EDGES.map(|(q, r)| orient2d(p, flat[q], flat[r]));
+                let inside = w.iter().zip(EDGES).all(|(&w, (q, r))| {
                     moved_orientation_is_positive(w, flat[q], flat[r]) == positive
                 });
                 if inside {
@@ -92,7 +91,6 @@ fn axis_parity(grid: &VoxelGrid, mesh: &TriMesh, axis: usize, odd: &mut [u8]) {
                         + weights[1] * tri[1][axis]
                         + weights[2] * tri[2][axis])
                         / total;
-                    let (lo, hi) = min_max(tri.map(|p| p[axis]));
                     crossings.push(((iu * dims[v] + iv) as u32, along.clamp(lo, hi)));
                 }
             }
@@ -162,19 +160,12 @@ mod tests {
 
     /// `mesh` with every vertex moved by `offset`.
     fn moved(mesh: &TriMesh, offset: Vec3) -> TriMesh {
-        let positions = mesh.positions().iter().map(|&p| p + offset).collect();
-        TriMesh::new(positions, mesh.triangles().to_vec()).expect("valid mesh")
+        mesh.translated(offset).expect("finite offset")
     }
 
     /// The union of meshes' triangle lists (no welding).
     fn merged(parts: &[TriMesh]) -> TriMesh {
-        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-        for part in parts {
-            let n = positions.len() as u32;
-            positions.extend_from_slice(part.positions());
-            triangles.extend(part.triangles().iter().map(|t| t.map(|v| v + n)));
-        }
-        TriMesh::new(positions, triangles).expect("valid mesh")
+        TriMesh::merged(parts).expect("valid parts")
     }
 
     /// A closed octahedron around `centre` with vertices `radius` away along the axes.

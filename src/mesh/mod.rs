@@ -6,6 +6,7 @@
 //! Only what cannot be a mesh is refused ([`MeshError`]): no triangles, an index out of range,
 //! a coordinate that is NaN or infinite, an unreadable or malformed file.
 
+mod combine;
 mod error;
 pub mod generate;
 mod obj;
