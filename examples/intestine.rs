@@ -48,9 +48,10 @@ fn main() {
         mean(Stage::SelfCollision),
         mean(Stage::Response)
     );
+    let queue = app.world().resource::<ContactQueue>();
     println!(
         "  {} self-contacts handled by the penalty response ({} still queued)",
-        d.counters.contacts,
-        app.world().resource::<ContactQueue>().len()
+        queue.consumed_total,
+        queue.len()
     );
 }

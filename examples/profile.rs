@@ -24,7 +24,11 @@
 //! `contacts`), `events_deferred` (contacts left for a later frame by the response budget),
 //! `events_lost` (written but never read by a reader that runs every other frame), `memory`
 //! (resident MiB after a tenth of the run and at the end, and the growth), and
-//! `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms).
+//! `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms:
+//! each frame 8 random pairs whose world boxes overlap, whether worked on in that frame or
+//! not), `agreement_adb` and `agreement_other` (the same for the pairs of ADB fidelity and for
+//! the others), `active_pairs` (pairs worked on per frame, mean) and `transitions` (touching
+//! states that flipped per frame, mean).
 #[path = "support/cli.rs"]
 mod cli;
 mod support;
@@ -37,7 +41,7 @@ use plotters::prelude::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use stochastic_collision::bvh::{QueryWorkspace, intersects};
-use stochastic_collision::ecs::{ColliderFrame, ContactQueue, PairOutcomes, Stage};
+use stochastic_collision::ecs::{ColliderTable, ContactQueue, PairTable, Stage};
 use stochastic_collision::prelude::*;
 use support::{Options, Scene, tally};
 
@@ -125,7 +129,8 @@ fn main() {
     let mut records = Vec::with_capacity(args.frames);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(args.options.seed ^ 0xa9);
     let mut ws = QueryWorkspace::new();
-    let (mut sampled, mut agreed) = (0u64, 0u64);
+    let mut agreement = Agreement::default();
+    let (mut active_pairs, mut transitions) = (0u64, 0u64);
     let run = Instant::now();
     // Resident memory after a tenth of the run (warm-up: queues, pools and pair tables grown)
     // and at the end: growth means something keeps accumulating.
@@ -147,24 +152,33 @@ fn main() {
                 .collect(),
             collision_us: d.collision_time.as_secs_f64() * 1e6,
         });
-        // Agreement: a few pairs per frame, re-tested exactly (outside the timed stages).
-        let entries = world.resource::<ColliderFrame>();
-        let outcomes = world.resource::<PairOutcomes>().outcomes();
-        let distinct: Vec<_> = outcomes.iter().filter(|o| o.a != o.b).collect();
-        for _ in 0..distinct.len().min(8) {
-            let o = distinct[rng.random_range(0..distinct.len())];
-            if let (Some(a), Some(b)) = (entries.get(o.a), entries.get(o.b)) {
-                let exact = intersects(
-                    a.geometry.mesh(),
-                    &a.pose,
-                    b.geometry.mesh(),
-                    &b.pose,
-                    &mut ws,
-                );
-                sampled += 1;
-                agreed += u64::from(exact == o.collides);
-            }
+        // Agreement: a few pairs per frame whose world boxes overlap (every such pair has an
+        // answer, worked on in this frame or still holding from an earlier one), re-tested
+        // exactly outside the timed stages; ADB pairs counted apart from the others.
+        let colliders = world.resource::<ColliderTable>();
+        let table = world.resource::<PairTable>();
+        let close: Vec<_> = table
+            .outcomes()
+            .filter(|o| o.a != o.b)
+            .filter_map(|o| Some((o, colliders.get(o.a)?, colliders.get(o.b)?)))
+            .filter(|(_, a, b)| a.aabb.intersects(&b.aabb))
+            .collect();
+        for _ in 0..close.len().min(8) {
+            let (o, a, b) = close[rng.random_range(0..close.len())];
+            let exact = intersects(
+                a.geometry.mesh(),
+                &a.pose,
+                b.geometry.mesh(),
+                &b.pose,
+                &mut ws,
+            );
+            let adb = matches!(a.fidelity.combine(b.fidelity), Fidelity::Adb { .. })
+                && a.is_rigid()
+                && b.is_rigid();
+            agreement.count(adb, exact == o.collides);
         }
+        active_pairs += table.active_pairs() as u64;
+        transitions += table.transitions() as u64;
     }
     let wall = run.elapsed();
     let memory = (rss_warm, resident_bytes());
@@ -172,13 +186,37 @@ fn main() {
         &args,
         &mut app,
         &records,
-        (sampled, agreed),
+        &agreement,
+        (active_pairs, transitions),
         (build_time, wall),
         memory,
     );
 }
 
 /// Resident set size of this process (Linux `/proc/self/statm`), if known.
+/// Sampled pairs re-tested exactly: (sampled, agreed) for ADB pairs and for the others.
+#[derive(Default)]
+struct Agreement {
+    adb: (u64, u64),
+    other: (u64, u64),
+}
+
+impl Agreement {
+    fn count(&mut self, adb: bool, agreed: bool) {
+        let c = if adb { &mut self.adb } else { &mut self.other };
+        c.0 += 1;
+        c.1 += u64::from(agreed);
+    }
+
+    fn share((sampled, agreed): (u64, u64)) -> f64 {
+        if sampled == 0 {
+            1.0
+        } else {
+            agreed as f64 / sampled as f64
+        }
+    }
+}
+
 fn resident_bytes() -> Option<u64> {
     let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
     let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
@@ -208,7 +246,8 @@ fn report(
     args: &Args,
     app: &mut bevy_app::App,
     records: &[FrameRecord],
-    (sampled, agreed): (u64, u64),
+    agreement: &Agreement,
+    (active_pairs, transitions): (u64, u64),
     (build_time, wall): (std::time::Duration, std::time::Duration),
     (rss_warm, rss_end): (Option<u64>, Option<u64>),
 ) {
@@ -229,16 +268,17 @@ fn report(
     } else {
         0
     };
-    let agreement = if sampled == 0 {
-        1.0
-    } else {
-        agreed as f64 / sampled as f64
-    };
+    let sampled = agreement.adb.0 + agreement.other.0;
+    let adb_samples = agreement.adb.0;
+    let agreement_adb = Agreement::share(agreement.adb);
+    let agreement_other = Agreement::share(agreement.other);
+    let agreement = Agreement::share((sampled, agreement.adb.1 + agreement.other.1));
+    let frames = records.len().max(1) as f64;
     let mut stages = String::new();
     println!(
         "scene {} ({} entities), {} frames, {} threads, budget {} us{}; setup {:.2} s, run {:.2} s",
         args.scene.name(),
-        world.resource::<ColliderFrame>().entries().len(),
+        world.resource::<ColliderTable>().len(),
         records.len(),
         args.options.threads,
         args.options.budget_us,
@@ -286,7 +326,7 @@ fn report(
         mib(rss_end)
     );
     println!(
-        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs",
+        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs (ADB pairs {agreement_adb:.4} on {adb_samples}, others {agreement_other:.4})",
         c.node_pairs,
         c.adb_pairs,
         c.budget_exhausted_pairs,
@@ -317,7 +357,7 @@ fn report(
     );
     if let Some(path) = &args.json {
         let json = format!(
-            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
+            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"agreement_adb\": {agreement_adb:.5},\n  \"agreement_adb_samples\": {adb_samples},\n  \"agreement_other\": {agreement_other:.5},\n  \"active_pairs\": {:.1},\n  \"transitions\": {:.2},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
             args.scene.name(),
             records.len(),
             args.options.threads,
@@ -325,11 +365,13 @@ fn report(
             args.options
                 .node_budget
                 .map_or("null".to_string(), |n| n.to_string()),
-            world.resource::<ColliderFrame>().entries().len(),
+            world.resource::<ColliderTable>().len(),
             args.options.seed,
             c.started,
             c.ended,
             c.contacts,
+            active_pairs as f64 / frames,
+            transitions as f64 / frames,
             mib(rss_warm),
             mib(rss_end),
             c.node_pairs,

@@ -58,7 +58,7 @@ pub mod prelude {
     pub use crate::ecs::{
         Collider, ColliderPose, CollidingEntities, CollisionConfig, CollisionDiagnostics,
         CollisionEnded, CollisionError, CollisionEventsEnabled, CollisionLayers, CollisionStarted,
-        CollisionSystems, Contact, ContactQueue, Deformable, Fidelity, FrameBudget,
+        CollisionSystems, Collisions, Contact, ContactQueue, Deformable, Fidelity, FrameBudget,
         ImpulseResponsePlugin, Mass, PenaltyResponsePlugin, SelfCollision,
         StochasticCollisionPlugin, Velocity,
     };

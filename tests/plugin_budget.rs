@@ -7,7 +7,7 @@ use std::time::Duration;
 use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
 use plugin_support::*;
-use stochastic_collision::ecs::{CollisionCounters, Method, PairOutcomes};
+use stochastic_collision::ecs::{ColliderTable, CollisionCounters, Method, PairOutcome, PairTable};
 use stochastic_collision::prelude::*;
 
 /// A cluster of overlapping detailed spheres: many ADB pairs that need work to settle.
@@ -121,10 +121,21 @@ fn level_geometry_holds_when_the_time_budget_is_spent() {
             .translation
             .y += 0.2;
         app.update();
-        let outcomes = app.world().resource::<PairOutcomes>().outcomes();
+        let outcomes: Vec<_> = app
+            .world()
+            .resource::<PairTable>()
+            .outcomes()
+            .cloned()
+            .collect();
+        // The slab's pairs whose world boxes overlap (the others are close, not touching).
+        let colliders = app.world().resource::<ColliderTable>();
+        let boxes_overlap = |o: &PairOutcome| {
+            let aabb = |e| colliders.get(e).unwrap().aabb;
+            aabb(o.a).intersects(&aabb(o.b))
+        };
         let slab_pairs: Vec<_> = outcomes
             .iter()
-            .filter(|o| o.a == floor || o.b == floor)
+            .filter(|o| (o.a == floor || o.b == floor) && boxes_overlap(o))
             .collect();
         for o in &slab_pairs {
             assert!(
@@ -135,11 +146,13 @@ fn level_geometry_holds_when_the_time_budget_is_spent() {
         if run == 3 {
             assert!(slab_pairs.len() >= 5, "{} slab pairs", slab_pairs.len());
         }
+        // The others were not tested: their last answers stand, from an earlier run.
+        let now = app.world().resource::<CollisionDiagnostics>().frame;
         assert!(
             outcomes
                 .iter()
                 .filter(|o| o.a != floor && o.b != floor)
-                .all(|o| matches!(o.method, Method::Coherence | Method::Cached))
+                .all(|o| o.run < now || matches!(o.method, Method::Coherence | Method::Cached))
         );
     }
 }

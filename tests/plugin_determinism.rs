@@ -16,6 +16,7 @@ fn run(threads: usize) -> (EventLog, Vec<[u32; 3]>) {
         threads,
         node_budget: Some(3000),
         seed: 7,
+        contact_messages: true,
         ..Options::default()
     };
     let mut app = Scene::Pile.build(&options);

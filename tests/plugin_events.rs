@@ -5,6 +5,7 @@ mod plugin_support;
 use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
+use bevy_ecs::system::RunSystemOnce;
 use plugin_support::*;
 use stochastic_collision::prelude::*;
 
@@ -150,6 +151,7 @@ fn a_reader_running_less_often_than_the_collision_schedule_sees_every_event() {
     app.add_plugins(
         StochasticCollisionPlugin::in_schedule(CollisionStep).with_config(CollisionConfig {
             budget: FrameBudget::Unlimited,
+            contact_messages: true,
             ..Default::default()
         }),
     )
@@ -193,6 +195,58 @@ fn a_reader_running_less_often_than_the_collision_schedule_sees_every_event() {
     assert_eq!(log.started.len() as u64, counters.started);
     assert_eq!(log.ended.len() as u64, counters.ended);
     assert_eq!(log.contacts.len() as u64, counters.contacts);
+    assert!(counters.contacts >= 10);
+}
+
+#[test]
+fn contacts_are_read_through_collisions_and_sent_as_messages_only_on_request() {
+    let mut app = App::new();
+    app.add_plugins(
+        StochasticCollisionPlugin::in_schedule(PostUpdate).with_config(CollisionConfig {
+            budget: FrameBudget::Unlimited,
+            ..Default::default()
+        }),
+    )
+    .init_resource::<EventLog>()
+    .add_systems(Last, log_events);
+    let ball = ball(1.0);
+    let a = spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0)));
+    let b = spawn(&mut app, (ball, at(1.5, 0.0, 0.0)));
+    let view = |app: &mut App| {
+        app.world_mut()
+            .run_system_once(move |c: Collisions| {
+                let p = c.get(b, a).expect("the pair exists");
+                let others: Vec<Entity> = c.touching_of(a).map(|p| p.other(a)).collect();
+                (
+                    p.touching(),
+                    p.contacts().len(),
+                    p.probability(),
+                    p.age(),
+                    others,
+                )
+            })
+            .unwrap()
+    };
+    app.update();
+    let (touching, contacts, probability, age, others) = view(&mut app);
+    assert!(touching && contacts > 0 && probability > 0.5);
+    assert_eq!((age, others), (0, vec![b]));
+    for _ in 0..3 {
+        app.update();
+    }
+    // At rest: still touching, the answer three runs old (nothing moved, so it holds), no
+    // contact message ever (not asked for), one start.
+    let (touching, contacts, _, age, _) = view(&mut app);
+    assert!(touching && contacts > 0);
+    assert_eq!(age, 3);
+    assert!(log(&app).contacts.is_empty());
+    assert_eq!(log(&app).started, vec![pair(a, b)]);
+    // Asked for: the contacts of the pairs answered in a run come as messages.
+    app.world_mut()
+        .resource_mut::<CollisionConfig>()
+        .contact_messages = true;
+    app.update();
+    assert!(!log(&app).contacts.is_empty());
 }
 
 #[test]

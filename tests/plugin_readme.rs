@@ -8,6 +8,7 @@ fn readme_example_runs() {
     let mut app = App::new();
     app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate).with_threads(2))
         .add_plugins(ImpulseResponsePlugin::in_schedule(PostUpdate))
+        .init_resource::<Seen>()
         .add_systems(PostUpdate, on_hit.after(CollisionSystems::Report));
     let rock = Collider::new(generate::icosphere(0.5, 2));
     for i in 0..20 {
@@ -31,13 +32,28 @@ fn readme_example_runs() {
             .started
             >= 19
     );
+    assert!(
+        app.world().resource::<Seen>().0 >= 19,
+        "every start has a contact"
+    );
 }
 
-fn on_hit(mut started: MessageReader<CollisionStarted>, mut contacts: MessageReader<Contact>) {
+fn on_hit(
+    mut started: MessageReader<CollisionStarted>,
+    collisions: Collisions,
+    mut seen: ResMut<Seen>,
+) {
     for e in started.read() {
-        let _ = (e.entity, e.other);
-    }
-    for c in contacts.read() {
-        let _ = (c.point, c.normal, c.depth, c.probability);
+        let pair = collisions
+            .get(e.entity, e.other)
+            .expect("a started pair is in the table");
+        for c in pair.contacts() {
+            let _ = (c.point, c.normal, c.depth, pair.probability());
+            seen.0 += 1;
+        }
     }
 }
+
+/// Contacts the README's reader saw (the README's prints them).
+#[derive(Resource, Default)]
+struct Seen(u64);

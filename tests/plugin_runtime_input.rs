@@ -8,7 +8,7 @@ use bevy_ecs::entity::Entity;
 use plugin_support::*;
 use stochastic_collision::adb::{Decision, Order};
 use stochastic_collision::ecs::{
-    ColliderFrame, CollisionErrorKind, Method, PairOutcomes, TrackingState,
+    ColliderTable, CollisionErrorKind, Method, PairOutcome, PairTable, TrackingState,
 };
 use stochastic_collision::prelude::*;
 
@@ -40,6 +40,12 @@ fn infinite_pose_is_an_error_for_that_entity_only() {
     assert!(l.ended.is_empty());
 }
 
+/// The answer of the first pair of the table.
+fn first_outcome(app: &App) -> PairOutcome {
+    let table = app.world().resource::<PairTable>();
+    table.outcomes().next().expect("a pair").clone()
+}
+
 /// Two balls at rest, touching, after a few runs (their contact started once).
 fn touching_balls(fidelity: Fidelity) -> (App, Entity, Entity) {
     let mut app = app();
@@ -55,24 +61,28 @@ fn touching_balls(fidelity: Fidelity) -> (App, Entity, Entity) {
 #[test]
 fn a_scene_at_rest_keeps_its_answers_until_a_fidelity_or_the_configuration_changes() {
     let (mut app, a, b) = touching_balls(Fidelity::Adb { p_min: 0.99 });
-    let outcomes = |app: &App| app.world().resource::<PairOutcomes>().outcomes().to_vec();
-    for _ in 0..3 {
-        app.update();
-    }
-    // At rest: every answer from the cache, the same run after run, the contact reported in
-    // every run, no event.
+    let outcomes = |app: &App| {
+        app.world()
+            .resource::<PairTable>()
+            .outcomes()
+            .cloned()
+            .collect::<Vec<_>>()
+    };
+    let run = |app: &App| app.world().resource::<CollisionDiagnostics>().frame;
+    let worked_on = |app: &App| app.world().resource::<PairTable>().active_pairs();
+    // At rest: the pair is not worked on; its answer (from the run it was tested in) stands,
+    // no contact is sent again, no event.
     let rest = outcomes(&app);
     assert_eq!(rest.len(), 1);
-    assert!(
-        rest.iter()
-            .all(|o| o.method == Method::Cached && o.collides)
-    );
+    assert!(rest[0].collides && rest[0].method == Method::Adb);
     let contacts = log(&app).contacts.len();
     for _ in 0..3 {
         app.update();
         assert_eq!(outcomes(&app), rest);
+        assert_eq!(worked_on(&app), 0);
     }
-    assert_eq!(log(&app).contacts.len(), contacts + 3);
+    assert!(rest[0].run < run(&app));
+    assert_eq!(log(&app).contacts.len(), contacts);
     assert_eq!(log(&app).started, vec![pair(a, b)]);
     assert!(log(&app).ended.is_empty());
     // A fidelity changed alone (nothing moves): the pair is answered by its new fidelity (a
@@ -80,19 +90,24 @@ fn a_scene_at_rest_keeps_its_answers_until_a_fidelity_or_the_configuration_chang
     app.world_mut().entity_mut(a).insert(Fidelity::Exact);
     app.update();
     assert_eq!(outcomes(&app)[0].method, Method::Exact);
+    assert_eq!(outcomes(&app)[0].run, run(&app));
     app.world_mut()
         .entity_mut(a)
         .insert(Fidelity::Adb { p_min: 0.99 });
+    app.update();
+    let tested = run(&app);
+    assert_eq!(outcomes(&app)[0].method, Method::Adb);
     for _ in 0..3 {
         app.update();
     }
-    assert_eq!(outcomes(&app)[0].method, Method::Cached);
-    // The configuration changed (the evidence an ADB query needs): answered anew, then cached.
+    assert_eq!(outcomes(&app)[0].run, tested, "not worked on again");
+    // The configuration changed (the evidence an ADB query needs): answered anew, then left.
     app.world_mut().resource_mut::<CollisionConfig>().k_min = 4;
     app.update();
     assert_eq!(outcomes(&app)[0].method, Method::Adb);
+    assert_eq!(outcomes(&app)[0].run, run(&app));
     app.update();
-    assert_eq!(outcomes(&app)[0].method, Method::Cached);
+    assert_eq!(worked_on(&app), 0);
     // A fidelity for colliders without one: planned again.
     app.world_mut().entity_mut(a).remove::<Fidelity>();
     app.world_mut().entity_mut(b).remove::<Fidelity>();
@@ -214,7 +229,7 @@ fn a_collider_swapped_at_rest_is_tested_again_not_answered_from_memory() {
         for _ in 0..3 {
             app.update();
         }
-        let frame = app.world().resource::<ColliderFrame>();
+        let frame = app.world().resource::<ColliderTable>();
         let (ba, bb) = (frame.get(a).unwrap().aabb, frame.get(b).unwrap().aabb);
         assert!(ba.intersects(&bb), "the boxes still overlap");
         assert_eq!(log(&app).ended, vec![pair(a, b)], "{fidelity:?}");
@@ -232,7 +247,7 @@ fn adb_node_pairs_of_two_balls(config: CollisionConfig, distance: f32) -> u64 {
     spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
     spawn(&mut app, (ball(1.0), at(distance, 0.0, 0.0)));
     app.update();
-    let o = app.world().resource::<PairOutcomes>().outcomes()[0].clone();
+    let o = first_outcome(&app);
     assert!(o.method == Method::Adb && o.collides, "{config:?}: {o:?}");
     o.node_pairs
 }
@@ -251,7 +266,7 @@ fn the_configured_adb_interior_is_the_one_the_queries_use() {
     spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
     spawn(&mut app, (ball(1.0), at(1.0, 0.0, 0.0)));
     app.update();
-    let o = app.world().resource::<PairOutcomes>().outcomes()[0].clone();
+    let o = first_outcome(&app);
     assert!(
         o.method == Method::Adb && o.collides && o.probability == 1.0,
         "{o:?}"
@@ -327,7 +342,7 @@ fn the_configured_adb_collide_at_decides_unsettled_answers() {
         spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0)));
         spawn(&mut app, (ball(1.0), at(1.42, 1.42, 0.0)));
         app.update();
-        app.world().resource::<PairOutcomes>().outcomes()[0].clone()
+        first_outcome(&app)
     };
     let (eager, strict) = (outcome(1e-6), outcome(1.0));
     assert_eq!(eager.method, Method::Adb);

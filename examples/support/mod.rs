@@ -35,6 +35,8 @@ pub struct Options {
     pub adb_order: Option<Order>,
     /// Whether ADB queries try the interpenetration certificate first (default: the plugin's).
     pub adb_interior: Option<bool>,
+    /// Write a `Contact` message per contact (`CollisionConfig::contact_messages`).
+    pub contact_messages: bool,
 }
 
 impl Default for Options {
@@ -49,6 +51,7 @@ impl Default for Options {
             adb_decision: None,
             adb_order: None,
             adb_interior: None,
+            contact_messages: false,
         }
     }
 }
@@ -69,6 +72,7 @@ impl Options {
             adb_decision: self.adb_decision.unwrap_or(defaults.adb_decision),
             adb_order: self.adb_order.unwrap_or(defaults.adb_order),
             adb_interior: self.adb_interior.unwrap_or(defaults.adb_interior),
+            contact_messages: self.contact_messages,
             ..defaults
         }
     }

@@ -148,8 +148,8 @@ impl Deformable {
 #[derive(Component, Clone, Copy, Debug, PartialEq)]
 pub enum Fidelity {
     /// The exact BVH query: a certain answer. Not cut by a work budget; under a time budget,
-    /// exact pairs are tested first, and those whose turn comes after the deadline keep their
-    /// last answer like any pair ([`Method::Coherence`](super::Method::Coherence)).
+    /// exact pairs are tested first, and those whose turn comes after the deadline get an
+    /// answer from their memory ([`Method::Coherence`](super::Method::Coherence)).
     Exact,
     /// The time-critical ADB traversal with this confidence target, cut by the pair's slice
     /// of the frame budget: the answer carries its probability.

@@ -1,7 +1,7 @@
 //! Contact points from what a query found: an intersecting triangle pair, or an ADB witness.
 use glam::Vec3;
 
-use super::prepare::world_aabb;
+use super::prepare::{ColliderEntry, world_aabb};
 use crate::adb::{ContactWitness, Interpenetration};
 use crate::bvh::{CollisionMesh, TrianglePair};
 use crate::geometry::{Aabb, Pose};
@@ -112,6 +112,27 @@ pub(crate) fn node_contact(
         point: w.point,
         normal,
         depth,
+        triangles: None,
+    }
+}
+
+/// The contact of two overlapping boxes: the centre of their overlap, the axis of least
+/// overlap (from the first towards the second), that overlap as depth.
+pub(crate) fn bounds_contact(a: &ColliderEntry, b: &ColliderEntry) -> ContactPoint {
+    let lo = a.aabb.min.max(b.aabb.min);
+    let hi = a.aabb.max.min(b.aabb.max);
+    let overlap = (hi - lo).max(Vec3::ZERO);
+    let axis = overlap.min_position();
+    let mut normal = Vec3::ZERO;
+    normal[axis] = if b.aabb.center()[axis] >= a.aabb.center()[axis] {
+        1.0
+    } else {
+        -1.0
+    };
+    ContactPoint {
+        point: (lo + hi) * 0.5,
+        normal,
+        depth: overlap[axis],
         triangles: None,
     }
 }

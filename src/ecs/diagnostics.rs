@@ -3,7 +3,7 @@ use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
 
-use super::plugin::{CollisionConfig, FrameBudget};
+use super::config::{CollisionConfig, FrameBudget};
 
 /// A stage of the pipeline whose time is measured (the Prepare set holds two: `prepare` and
 /// `refit`; the Tracking set two: `self_collision` and `tracking`).
@@ -77,8 +77,8 @@ pub struct CollisionCounters {
     pub adb_pairs: u64,
     /// ADB pairs that ran out of their slice.
     pub budget_exhausted_pairs: u64,
-    /// Pairs not tested under a time budget (not among the most urgent that fit, or past the
-    /// deadline), answered from the previous run (see
+    /// Active pairs not tested under a time budget (not among the most urgent that fit, or
+    /// past the deadline), which kept their last answer (an exact pair got one from memory,
     /// [`Method::Coherence`](super::Method::Coherence)).
     pub coherence_pairs: u64,
     /// Pairs answered by a test (ADB or exact) in the narrow phase.
@@ -86,7 +86,8 @@ pub struct CollisionCounters {
     /// Wall-clock time of the narrow phase's parallel tests, summed over runs: with
     /// `tested_pairs` and `node_pairs`, the narrow phase's throughput.
     pub test_time: Duration,
-    /// Pairs not tested because neither entity moved (see [`Method::Cached`](super::Method::Cached)).
+    /// Active pairs not tested because neither entity moved since their settled answer (see
+    /// [`Method::Cached`](super::Method::Cached)); pairs not active at all are not counted.
     pub cached_pairs: u64,
     /// Pairs tested exactly.
     pub exact_pairs: u64,

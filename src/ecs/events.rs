@@ -3,7 +3,9 @@
 //!
 //! # Reading events
 //! As messages, in any system (runs after [`CollisionSystems::Report`] see them in the same
-//! frame):
+//! frame; [`Contact`] messages only with
+//! [`CollisionConfig::contact_messages`](super::CollisionConfig::contact_messages), else read
+//! contacts through [`Collisions`](super::Collisions)):
 //! ```
 //! # use bevy_ecs::prelude::*;
 //! # use stochastic_collision::prelude::*;
@@ -34,12 +36,13 @@
 use std::time::Instant;
 
 use bevy_ecs::prelude::*;
+use bevy_ecs::system::SystemParam;
 use glam::Vec3;
 
 use super::components::{CollidingEntities, CollisionEventsEnabled};
+use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, end_frame};
-use super::narrow_phase::{PairOutcome, PairOutcomes};
-use super::plugin::CollisionConfig;
+use super::pairs::PairTable;
 use crate::bvh::TrianglePair;
 use crate::mesh::MeshError;
 
@@ -68,7 +71,8 @@ pub struct CollisionEnded {
     pub other: Entity,
 }
 
-/// One contact point of a colliding pair in this run.
+/// One contact point of a colliding pair answered in this run (written only with
+/// [`CollisionConfig::contact_messages`](super::CollisionConfig::contact_messages)).
 #[derive(Message, Clone, Copy, Debug, PartialEq)]
 pub struct Contact {
     /// First entity.
@@ -87,7 +91,9 @@ pub struct Contact {
     pub triangles: Option<TrianglePair>,
     /// Priority for responses (higher first): the pair's priority, deeper contacts higher.
     pub priority: f32,
-    /// Run in which the contact was found (see [`CollisionDiagnostics::frame`]).
+    /// Run at whose poses the contact was found (see [`CollisionDiagnostics::frame`]):
+    /// earlier than the current run for a pair whose last answer was kept (not tested in
+    /// this run), whose contact then has depth 0.
     pub frame: u64,
 }
 
@@ -115,22 +121,6 @@ pub struct CollisionError {
     pub entity: Entity,
     /// What is wrong.
     pub kind: CollisionErrorKind,
-}
-
-/// What the Report stage remembers: the touching pairs of the last run.
-#[derive(Resource, Debug, Default)]
-pub struct ReportState {
-    touching: Vec<(Entity, Entity)>,
-    /// Reused buffers (no fresh memory every run): this run's touching pairs, fresh contacts.
-    now: Vec<(Entity, Entity)>,
-    fresh: Vec<Contact>,
-}
-
-impl ReportState {
-    /// The pairs touching in the last run, sorted (`(e, e)` for self-collision).
-    pub fn touching(&self) -> &[(Entity, Entity)] {
-        &self.touching
-    }
 }
 
 /// Contacts waiting for a response, highest priority first.
@@ -249,108 +239,105 @@ impl ContactQueue {
     }
 }
 
-/// Compares the run's answers with the last run's and writes the events.
+/// Writes the events of this run's transitions (pairs whose touching state flipped, in pair
+/// order: the ends first, then the starts), updates [`CollidingEntities`], triggers observer
+/// events, and hands this run's contacts (of the pairs answered in this run) to the
+/// [`ContactQueue`] and, if [`CollisionConfig::contact_messages`], as [`Contact`] messages.
 #[allow(clippy::too_many_arguments)]
 pub fn report_collisions(
-    mut outcomes: ResMut<PairOutcomes>,
-    mut state: ResMut<ReportState>,
+    mut pairs: ResMut<PairTable>,
     mut queue: ResMut<ContactQueue>,
     config: Res<CollisionConfig>,
     mut colliding: Query<&mut CollidingEntities>,
     observed: Query<(), With<CollisionEventsEnabled>>,
-    mut started_w: MessageWriter<CollisionStarted>,
-    mut ended_w: MessageWriter<CollisionEnded>,
-    mut contact_w: MessageWriter<Contact>,
+    mut writers: ReportWriters,
     mut commands: Commands,
     mut diag: ResMut<CollisionDiagnostics>,
+    mut fresh: Local<Vec<Contact>>,
 ) {
     let start = Instant::now();
     let frame = diag.frame;
-    let key = |o: &PairOutcome| (o.a, o.b);
-    if !outcomes.outcomes.is_sorted_by_key(key) {
-        outcomes.outcomes.sort_by_key(key);
-    }
-    let state = &mut *state;
-    let now = &mut state.now;
-    now.clear();
-    now.extend(
-        outcomes
-            .outcomes
+    let pairs = &mut *pairs;
+    pairs.transitions.sort_unstable();
+    let (mut started, mut ended) = (0u64, 0u64);
+    for pass_started in [false, true] {
+        for t in pairs
+            .transitions
             .iter()
-            .filter(|o| o.collides)
-            .map(|o| (o.a, o.b)),
-    );
-    let (mut started, mut ended) = (Vec::new(), Vec::new());
-    let (mut i, mut j) = (0, 0);
-    let old = &state.touching;
-    while i < old.len() || j < now.len() {
-        match (old.get(i), now.get(j)) {
-            (Some(o), Some(n)) if o == n => (i, j) = (i + 1, j + 1),
-            (Some(o), Some(n)) if o < n => {
-                ended.push(*o);
-                i += 1;
+            .filter(|t| t.started == pass_started)
+        {
+            let (a, b) = (t.a, t.b);
+            set_colliding(&mut colliding, a, b, t.started);
+            if t.started {
+                started += 1;
+                writers.started.write(CollisionStarted {
+                    entity: a,
+                    other: b,
+                });
+                notify(&mut commands, &observed, a, b, |entity, other| {
+                    CollisionStarted { entity, other }
+                });
+            } else {
+                ended += 1;
+                writers.ended.write(CollisionEnded {
+                    entity: a,
+                    other: b,
+                });
+                notify(&mut commands, &observed, a, b, |entity, other| {
+                    CollisionEnded { entity, other }
+                });
             }
-            (Some(o), None) => {
-                ended.push(*o);
-                i += 1;
-            }
-            (_, Some(n)) => {
-                started.push(*n);
-                j += 1;
-            }
-            (None, None) => break,
         }
     }
-    for &(a, b) in &ended {
-        set_colliding(&mut colliding, a, b, false);
-        ended_w.write(CollisionEnded {
-            entity: a,
-            other: b,
-        });
-        notify(&mut commands, &observed, a, b, |entity, other| {
-            CollisionEnded { entity, other }
-        });
-    }
-    for &(a, b) in &started {
-        set_colliding(&mut colliding, a, b, true);
-        started_w.write(CollisionStarted {
-            entity: a,
-            other: b,
-        });
-        notify(&mut commands, &observed, a, b, |entity, other| {
-            CollisionStarted { entity, other }
-        });
-    }
-    let fresh = &mut state.fresh;
+    // This run's contacts, in pair order.
+    let slots = &pairs.slots;
+    pairs
+        .colliding
+        .sort_unstable_by_key(|&p| (slots[p as usize].a, slots[p as usize].b));
+    pairs.colliding.dedup();
     fresh.clear();
-    for o in outcomes.outcomes.iter().filter(|o| o.collides) {
+    let wanted = config.contact_messages || queue.is_enabled();
+    for &p in pairs.colliding.iter().filter(|_| wanted) {
+        let o = &slots[p as usize].outcome;
+        if !o.collides {
+            continue;
+        }
+        // An answer kept from an earlier run gives its contacts without depth (they stop
+        // approach without pushing the same correction twice) and the run they were found in.
+        let kept = o.run < frame;
         for c in &o.contacts {
+            let depth = if kept { 0.0 } else { c.depth };
             fresh.push(Contact {
                 a: o.a,
                 b: o.b,
                 point: c.point,
                 normal: c.normal,
-                depth: c.depth,
+                depth,
                 probability: o.probability,
                 triangles: c.triangles,
-                priority: o.priority * (1.0 + c.depth.max(0.0)),
-                frame,
+                priority: o.priority * (1.0 + depth.max(0.0)),
+                frame: o.computed_run,
             });
         }
     }
-    contact_w.write_batch(fresh.iter().copied());
     let counters = &mut diag.counters;
-    counters.started += started.len() as u64;
-    counters.ended += ended.len() as u64;
-    counters.contacts += fresh.len() as u64;
-    queue.refill(fresh, config.response_budget);
-    std::mem::swap(&mut state.touching, &mut state.now);
-    diag.record(
-        Stage::Report,
-        start.elapsed(),
-        (started.len() + ended.len()) as u64,
-    );
+    if config.contact_messages {
+        writers.contacts.write_batch(fresh.iter().copied());
+        counters.contacts += fresh.len() as u64;
+    }
+    counters.started += started;
+    counters.ended += ended;
+    queue.refill(&mut fresh, config.response_budget);
+    diag.record(Stage::Report, start.elapsed(), started + ended);
     end_frame(&mut diag, &config);
+}
+
+/// The messages the Report stage writes.
+#[derive(SystemParam)]
+pub struct ReportWriters<'w> {
+    started: MessageWriter<'w, CollisionStarted>,
+    ended: MessageWriter<'w, CollisionEnded>,
+    contacts: MessageWriter<'w, Contact>,
 }
 
 /// Updates both entities' [`CollidingEntities`] (not for a self-collision).

@@ -5,36 +5,48 @@
 //! Add [`StochasticCollisionPlugin`], give entities a [`Collider`] (rigid, shared mesh and
 //! ADB-tree) or a [`Deformable`] (owned, refitted mesh) and a pose ([`ColliderPose`], or
 //! bevy_transform's `GlobalTransform` with the `transform` feature), and read
-//! [`CollisionStarted`], [`CollisionEnded`] and [`Contact`] messages, or observe them per
-//! entity ([`CollisionEventsEnabled`]).
+//! [`CollisionStarted`] and [`CollisionEnded`] messages, or observe them per entity
+//! ([`CollisionEventsEnabled`]); read contacts, touching or not, with their confidence and
+//! age through the [`Collisions`] system parameter ([`Contact`] messages on request:
+//! [`CollisionConfig::contact_messages`]).
 //!
-//! Each run goes through the chained [`CollisionSystems`]:
-//! 1. **Prepare**: poses, refit of deformed meshes (parallel), validation (bad entities are
-//!    reported with a [`CollisionError`] and skipped), world boxes.
-//! 2. **BroadPhase**: sweep and prune with temporal coherence, [`CollisionLayers`] filtering.
-//! 3. **NarrowPhase**: per pair, in parallel, by [`Fidelity`]: exact, ADB (cut by its share of
-//!    the [`FrameBudget`], priority by last confidence, closeness and speed) or bounds.
+//! The plugin keeps its world between runs: a [`ColliderTable`] (one slot per collider) and a
+//! [`PairTable`] (one slot per pair of close colliders, with its last answer). A run works
+//! only on what changed, through the chained [`CollisionSystems`]:
+//! 1. **Prepare**: the colliders whose pose, mesh, fidelity or layers changed (Bevy's change
+//!    detection), refit of deformed meshes (parallel), validation (bad entities are reported
+//!    with a [`CollisionError`] and skipped), world boxes.
+//! 2. **BroadPhase**: colliders whose world box left their broad-phase (fat) box, and only
+//!    they, get a new one; pairs are created and removed at that moment (sweep and prune over
+//!    the fat boxes, [`CollisionLayers`] filtering).
+//! 3. **NarrowPhase**: the *active* pairs (of colliders that changed, new, or waiting for a
+//!    test), in parallel, by [`Fidelity`]: exact, ADB (cut by its share of the
+//!    [`FrameBudget`], priority by last confidence, closeness, speed and waiting) or bounds;
+//!    under a time budget the pairs not tested keep their last answer, one run older.
 //! 4. **Tracking**: tracked pairs and self-collision of [`SelfCollision`] meshes, in parallel.
-//! 5. **Report**: started/ended/contact messages in a deterministic order,
-//!    [`CollidingEntities`], observer events, the [`ContactQueue`].
+//! 5. **Report**: the pairs whose touching state flipped: started/ended messages in a
+//!    deterministic order, [`CollidingEntities`], observer events; this run's contacts to the
+//!    [`ContactQueue`].
 //! 6. **Response**: the built-in [`ImpulseResponsePlugin`] and [`PenaltyResponsePlugin`], or
 //!    your own systems, consuming contacts by priority within the response budget.
 //!
 //! A stage runs only when some entity needs it; [`CollisionDiagnostics`] has each stage's time
-//! (`None` when it did not run) and the work done.
+//! (`None` when it did not run) and the work done. A scene at rest costs almost nothing.
 //!
 //! # Determinism
-//! Pairs are processed in parallel and merged in entity order; with a
-//! [`FrameBudget::NodePairs`] budget (or none), a run gives the same events for any number of
-//! threads. A [`FrameBudget::Time`] budget adapts to the machine's speed, so its results
-//! depend on timing.
+//! Pairs are processed in parallel and recorded in an order that depends only on the history
+//! of the tables; with a [`FrameBudget::NodePairs`] budget (or none), a run gives the same
+//! events for any number of threads. A [`FrameBudget::Time`] budget adapts to the machine's
+//! speed, so its results depend on timing.
 mod broad_phase;
 mod budget;
 mod components;
+mod config;
 mod contact;
 mod diagnostics;
 mod events;
 mod narrow_phase;
+mod pairs;
 mod plugin;
 mod pool;
 mod prepare;
@@ -42,24 +54,25 @@ mod response;
 mod schedule;
 mod tracking_systems;
 
-pub use broad_phase::{BroadPhaseState, CandidatePair, CandidatePairs};
+pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{
     Collider, ColliderPose, CollidingEntities, CollisionEventsEnabled, CollisionLayers, Deformable,
     Fidelity, SelfCollision,
 };
+pub use config::{CollisionConfig, FrameBudget};
 pub use contact::ContactPoint;
 #[cfg(feature = "diagnostic")]
 pub use diagnostics::store as diagnostics_store;
 pub use diagnostics::{CollisionCounters, CollisionDiagnostics, Stage, StageRecord};
 pub use events::{
     CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact, ContactQueue,
-    ReportState,
 };
-pub use narrow_phase::{Method, PairOutcome, PairOutcomes};
-pub use plugin::{CollisionConfig, FrameBudget, StochasticCollisionPlugin};
+pub use narrow_phase::{Method, NarrowPhaseState, PairOutcome};
+pub use pairs::{Collisions, PairTable, PairView};
+pub use plugin::StochasticCollisionPlugin;
 pub use pool::CollisionTaskPool;
-pub use prepare::{ColliderEntry, ColliderFrame, Geometry, PrepareState};
+pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState};
 pub use response::{
     ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Rest,
     Velocity, impulse_response, integrate_velocities, penalty_response, sleep_bodies,

@@ -14,14 +14,15 @@ pub enum CollisionSystems {
     /// Poses from `GlobalTransform` or [`ColliderPose`](super::ColliderPose), refit of
     /// deformed meshes, validation, world boxes.
     Prepare,
-    /// Candidate pairs from the world boxes (sweep and prune), filtered by layers.
+    /// Pairs created and removed where colliders left their broad-phase boxes (sweep and
+    /// prune), filtered by layers.
     BroadPhase,
-    /// Per candidate pair, in parallel: exact, ADB (cut by the budget) or bounds.
+    /// Per active pair, in parallel: exact, ADB (cut by the budget) or bounds.
     NarrowPhase,
     /// Tracked pairs and self-collision of deformable meshes, in parallel.
     Tracking,
-    /// Compare with the last run: started/ended/contact messages, `CollidingEntities`,
-    /// observer events, the contact queue.
+    /// The pairs whose touching state flipped: started/ended messages, `CollidingEntities`,
+    /// observer events; this run's contacts to the contact queue (and as messages, on request).
     Report,
     /// Responses consuming the contact queue (built-in plugins or your own systems).
     Response,

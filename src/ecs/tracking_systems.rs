@@ -6,7 +6,7 @@
 //! and the two entities, so results do not depend on thread scheduling), and its contacts come
 //! with points, normals and depths. Other self-colliding meshes get the exact BVH pass
 //! (`self_intersections`). Trackers and surfaces run in parallel; the outcomes are merged in
-//! entity order. Each entity's [`FeaturePairs`] lists the triangle pairs in contact with each
+//! pair order. Each entity's [`FeaturePairs`] lists the triangle pairs in contact with each
 //! partner, as of the last run.
 //!
 //! [`Fidelity::Tracking`]: super::Fidelity::Tracking
@@ -19,24 +19,26 @@ use bevy_ecs::entity::{EntityHashMap, EntityHashSet};
 use bevy_ecs::prelude::*;
 use smallvec::SmallVec;
 
-use super::components::{Deformable, Fidelity, SelfCollision};
+use super::components::Fidelity;
+use super::config::{CollisionConfig, FrameBudget};
 use super::contact::{ContactPoint, triangle_pair_contact};
 use super::diagnostics::{CollisionDiagnostics, Stage};
-use super::narrow_phase::{Method, PairOutcome, PairOutcomes, spread, with_workspaces};
-use super::plugin::{CollisionConfig, FrameBudget};
+use super::narrow_phase::{Method, PairOutcome, spread, with_workspaces};
+use super::pairs::PairTable;
 use super::pool::CollisionTaskPool;
-use super::prepare::{ColliderEntry, ColliderFrame, Geometry};
+use super::prepare::{ColliderEntry, ColliderTable, Geometry};
 use crate::bvh::{CollisionMesh, TrianglePair, self_intersections};
 use crate::geometry::Pose;
 use crate::tracking::{Contact, TrackedSurface, Tracker, TrackerConfig};
 
 /// The feature pairs an entity is tracking against each partner (itself for self-collision),
 /// as of the last run: kept across runs, dropped with the entity. Inserted by the Tracking
-/// stage on the first (smaller) entity of each tracked pair.
+/// stage on both entities of each tracked pair, every partner listed, each pair as (this
+/// entity's triangle, the partner's).
 #[derive(Component, Debug, Clone, Default, PartialEq)]
 pub struct FeaturePairs {
     /// Per partner entity, the triangle pairs (this entity's, the partner's) in contact.
-    pub partners: SmallVec<[(Entity, SmallVec<[TrianglePair; 4]>); 2]>,
+    pub partners: SmallVec<[(Entity, Vec<TrianglePair>); 2]>,
 }
 
 impl FeaturePairs {
@@ -189,18 +191,25 @@ fn world_contact(c: &Contact, pose_a: &Pose, self_mode: bool) -> ContactPoint {
 /// One tracker's work in a run.
 struct Job {
     key: (Entity, Entity),
+    /// The pair's slot in the pair table, and its colliders' slots.
+    pair: u32,
     a: u32,
     b: u32,
     tracker: Tracker,
     contacts: SmallVec<[ContactPoint; 1]>,
-    pairs: SmallVec<[TrianglePair; 4]>,
+    pairs: Vec<TrianglePair>,
 }
 
-/// The job of entries `a` and `b` (the same for a self-colliding mesh): the pair's tracker,
-/// taken out of `state` or made with the pair's fidelity (pairs per frame) and seed. Their
-/// surfaces must be up to date.
-fn job(state: &mut TrackingState, frame: &ColliderFrame, a: u32, b: u32, seed: u64) -> Job {
-    let (ea, eb) = (&frame.entries[a as usize], &frame.entries[b as usize]);
+/// The job of pair slot `pair` between colliders `a` and `b` (the same for a self-colliding
+/// mesh): the pair's tracker, taken out of `state` or made with the pair's fidelity (pairs
+/// per frame) and seed. Their surfaces must be up to date.
+fn job(
+    state: &mut TrackingState,
+    colliders: &ColliderTable,
+    (pair, a, b): (u32, u32, u32),
+    seed: u64,
+) -> Job {
+    let (ea, eb) = (colliders.entry(a), colliders.entry(b));
     let key = (ea.entity, eb.entity);
     let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
         let n = match ea.fidelity.combine(eb.fidelity) {
@@ -215,11 +224,12 @@ fn job(state: &mut TrackingState, frame: &ColliderFrame, a: u32, b: u32, seed: u
     });
     Job {
         key,
+        pair,
         a,
         b,
         tracker,
         contacts: SmallVec::new(),
-        pairs: SmallVec::new(),
+        pairs: Vec::new(),
     }
 }
 
@@ -227,17 +237,14 @@ fn job(state: &mut TrackingState, frame: &ColliderFrame, a: u32, b: u32, seed: u
 /// work (see [`Tracker::step_self_until`]).
 fn run_jobs(
     jobs: &mut [Job],
-    frame: &ColliderFrame,
+    colliders: &ColliderTable,
     state: &TrackingState,
     pool: &CollisionTaskPool,
     max_contacts: usize,
     deadline: Option<Instant>,
 ) {
     pool.for_each_mut(jobs, 1, |job| {
-        let (ea, eb) = (
-            &frame.entries[job.a as usize],
-            &frame.entries[job.b as usize],
-        );
+        let (ea, eb) = (colliders.entry(job.a), colliders.entry(job.b));
         let sa = &state.surfaces[&ea.entity].surface;
         let self_mode = job.a == job.b;
         let found: &[Contact] = if self_mode {
@@ -255,7 +262,6 @@ fn run_jobs(
             .collect();
         job.pairs = found
             .iter()
-            .take(16)
             .map(|c| TrianglePair {
                 a: c.triangle_a,
                 b: c.triangle_b,
@@ -264,55 +270,59 @@ fn run_jobs(
     });
 }
 
-/// Records `pairs` as `a`'s feature pairs with `b` (inserting the component if needed).
+/// Feature pairs of this run for entities that have no [`FeaturePairs`] yet, inserted once
+/// each at the end (every partner kept, none overwritten by another's insert).
+#[derive(Default)]
+struct NewFeaturePairs(EntityHashMap<FeaturePairs>);
+
+/// Records `pairs` (`a`'s triangle, `b`'s) as `a`'s feature pairs with `b` and, swapped, as
+/// `b`'s with `a`.
 fn record_pairs(
     features: &mut Query<&mut FeaturePairs>,
-    commands: &mut Commands,
-    a: Entity,
-    b: Entity,
-    pairs: SmallVec<[TrianglePair; 4]>,
+    new: &mut NewFeaturePairs,
+    (a, b): (Entity, Entity),
+    pairs: &[TrianglePair],
 ) {
-    match features.get_mut(a) {
-        Ok(mut f) => {
-            let f = &mut *f;
-            f.partners.retain(|(e, _)| *e != b);
-            if !pairs.is_empty() {
-                f.partners.push((b, pairs));
+    let swapped: Vec<TrianglePair> = pairs
+        .iter()
+        .map(|t| TrianglePair { a: t.b, b: t.a })
+        .collect();
+    let sides: [(Entity, Entity, &[TrianglePair]); 2] = [(a, b, pairs), (b, a, &swapped)];
+    for &(owner, partner, list) in &sides[..if a == b { 1 } else { 2 }] {
+        let set = |f: &mut FeaturePairs| {
+            f.partners.retain(|(e, _)| *e != partner);
+            if !list.is_empty() {
+                f.partners.push((partner, list.to_vec()));
             }
+        };
+        match features.get_mut(owner) {
+            Ok(mut f) => set(&mut f),
+            Err(_) if !list.is_empty() => set(new.0.entry(owner).or_default()),
+            Err(_) => {}
         }
-        Err(_) if !pairs.is_empty() => {
-            let mut f = FeaturePairs::default();
-            f.partners.push((b, pairs));
-            commands.entity(a).try_insert(f);
+    }
+}
+
+impl NewFeaturePairs {
+    fn insert(self, commands: &mut Commands) {
+        let mut new: Vec<_> = self.0.into_iter().collect();
+        new.sort_unstable_by_key(|(e, _)| *e);
+        for (e, f) in new {
+            commands.entity(e).try_insert(f);
         }
-        Err(_) => {}
     }
 }
 
 /// Drops the feature pairs of partners that are no longer tracked (apart, despawned, or
-/// changed fidelity), so each entity's lists hold only live pairs; a self-colliding mesh
-/// keeps its own.
-pub fn prune_feature_pairs(
-    frame: Res<ColliderFrame>,
-    outcomes: Res<PairOutcomes>,
-    mut q: Query<(Entity, &mut FeaturePairs)>,
-) {
-    let mut live: Vec<(Entity, Entity)> = outcomes
+/// changed fidelity), so each entity's lists hold only live pairs.
+pub fn prune_feature_pairs(pairs: Res<PairTable>, mut q: Query<(Entity, &mut FeaturePairs)>) {
+    let mut live: Vec<(Entity, Entity)> = pairs
         .tracked
         .iter()
-        .map(|p| {
-            (
-                frame.entries[p.a as usize].entity,
-                frame.entries[p.b as usize].entity,
-            )
+        .flat_map(|&p| {
+            let s = pairs.slot(p);
+            [(s.a, s.b), (s.b, s.a)]
         })
-        .chain(
-            frame
-                .entries
-                .iter()
-                .filter(|e| e.self_collision)
-                .map(|e| (e.entity, e.entity)),
-        )
         .collect();
     live.sort_unstable();
     for (owner, mut f) in &mut q {
@@ -326,42 +336,60 @@ pub fn prune_feature_pairs(
     }
 }
 
-/// Run condition: some deformable mesh has the [`SelfCollision`] marker.
-pub fn needs_self_pass(q: Query<(), (With<SelfCollision>, With<Deformable>)>) -> bool {
-    !q.is_empty()
+/// The tracked pairs of this run: `(pair, collider a, collider b)`, self-collisions
+/// (`a == b`) or pairs of two colliders.
+fn tracked(pairs: &PairTable, self_pairs: bool) -> Vec<(u32, u32, u32)> {
+    pairs
+        .tracked
+        .iter()
+        .map(|&p| (p, pairs.ends(p).body_a, pairs.ends(p).body_b))
+        .filter(|&(_, a, b)| (a == b) == self_pairs)
+        .collect()
 }
 
-/// Run condition: the narrow phase handed over some tracked pair.
-pub fn needs_tracking(outcomes: Res<PairOutcomes>) -> bool {
-    !outcomes.tracked.is_empty()
+/// Run condition: the narrow phase handed over some self-colliding mesh.
+pub fn needs_self_pass(pairs: Res<PairTable>) -> bool {
+    pairs
+        .tracked
+        .iter()
+        .any(|&p| pairs.ends(p).body_a == pairs.ends(p).body_b)
+}
+
+/// Run condition: the narrow phase handed over some tracked pair of two colliders.
+pub fn needs_tracking(pairs: Res<PairTable>) -> bool {
+    pairs
+        .tracked
+        .iter()
+        .any(|&p| pairs.ends(p).body_a != pairs.ends(p).body_b)
+}
+
+/// What the Tracking stage's systems share: the tables, the trackers, the task pool.
+#[derive(bevy_ecs::system::SystemParam)]
+pub struct TrackingContext<'w, 's> {
+    colliders: Res<'w, ColliderTable>,
+    pairs: ResMut<'w, PairTable>,
+    config: Res<'w, CollisionConfig>,
+    pool: Res<'w, CollisionTaskPool>,
+    state: ResMut<'w, TrackingState>,
+    features: Query<'w, 's, &'static mut FeaturePairs>,
+    commands: Commands<'w, 's>,
+    diag: ResMut<'w, CollisionDiagnostics>,
 }
 
 /// Self-collision of every [`SelfCollision`] deformable mesh, in parallel per mesh: the
 /// stochastic tracker for meshes with [`Fidelity::Tracking`], the exact pass for the others.
-#[allow(clippy::too_many_arguments)]
-pub fn self_collision(
-    frame: Res<ColliderFrame>,
-    config: Res<CollisionConfig>,
-    pool: Res<CollisionTaskPool>,
-    mut state: ResMut<TrackingState>,
-    mut outcomes: ResMut<PairOutcomes>,
-    mut features: Query<&mut FeaturePairs>,
-    mut commands: Commands,
-    mut diag: ResMut<CollisionDiagnostics>,
-) {
+pub fn self_collision(mut cx: TrackingContext) {
     let start = Instant::now();
-    let meshes: Vec<u32> = (0..frame.entries.len() as u32)
-        .filter(|&i| frame.entries[i as usize].self_collision)
-        .collect();
-    let (tracked, exact): (Vec<u32>, Vec<u32>) = meshes.iter().partition(|&&i| {
-        matches!(
-            frame.entries[i as usize].fidelity,
-            Fidelity::Tracking { .. }
-        )
-    });
-    let max = config.max_self_contacts;
-    let results = pool.map_chunks(&exact, 1, |chunk| {
-        let e = &frame.entries[chunk[0] as usize];
+    let run = cx.diag.frame;
+    let meshes = tracked(&cx.pairs, true);
+    let colliders = &*cx.colliders;
+    let (stochastic, exact): (Vec<_>, Vec<_>) = meshes
+        .iter()
+        .partition(|&&(_, i, _)| matches!(colliders.entry(i).fidelity, Fidelity::Tracking { .. }));
+    let max = cx.config.max_self_contacts;
+    let results = cx.pool.map_chunks(&exact, 1, |chunk| {
+        let (pair, i, _) = chunk[0];
+        let e = colliders.entry(i);
         let mesh = e.geometry.mesh();
         with_workspaces(|ws, _, pairs| {
             pairs.clear();
@@ -370,85 +398,56 @@ pub fn self_collision(
                 .map(|t| triangle_pair_contact(mesh, &e.pose, mesh, &e.pose, t))
                 .collect();
             let ends = (e.entity, e.entity);
-            PairOutcome::exact(
-                ends,
-                Method::SelfCollision,
-                ws.node_pairs_visited(),
-                1.0,
-                contacts,
-            )
+            let nodes = ws.node_pairs_visited();
+            let o = PairOutcome::exact(ends, Method::SelfCollision, nodes, 1.0, contacts, run);
+            (pair, o)
         })
     });
-    diag.counters.node_pairs += results.iter().map(|o| o.node_pairs).sum::<u64>();
-    outcomes.outcomes.extend(results);
-
-    // Stochastic self-collision.
-    let pairs: Vec<(u32, u32)> = tracked.iter().map(|&i| (i, i)).collect();
-    let jobs = tracked_jobs(&mut state, &frame, &pool, &config, &diag, &pairs);
-    finish_jobs(
-        jobs,
-        &mut state,
-        &mut outcomes,
-        &mut features,
-        &mut commands,
-        &mut diag,
-        Method::SelfCollision,
-    );
-    diag.record(Stage::SelfCollision, start.elapsed(), meshes.len() as u64);
+    cx.diag.counters.node_pairs += results.iter().map(|(_, o)| o.node_pairs).sum::<u64>();
+    for (pair, o) in results {
+        cx.pairs.answer(pair, o, None, run);
+    }
+    let jobs = tracked_jobs(&mut cx, &stochastic);
+    finish_jobs(&mut cx, jobs, Method::SelfCollision);
+    cx.diag
+        .record(Stage::SelfCollision, start.elapsed(), meshes.len() as u64);
 }
 
-/// The tracker jobs of `pairs` (entry indices; `(i, i)` for a self-colliding mesh), run: the
-/// surfaces of the entries involved brought up to date first, at most `max_self_contacts`
-/// contacts each, the trackers' searches cut at the run's deadline under a time budget.
-fn tracked_jobs(
-    state: &mut TrackingState,
-    frame: &ColliderFrame,
-    pool: &CollisionTaskPool,
-    config: &CollisionConfig,
-    diag: &CollisionDiagnostics,
-    pairs: &[(u32, u32)],
-) -> Vec<Job> {
-    let (seed, max) = (config.seed, config.max_self_contacts);
-    let deadline = tracking_deadline(config, diag);
-    let mut involved: Vec<u32> = pairs.iter().flat_map(|&(a, b)| [a, b]).collect();
+/// The tracker jobs of `pairs` (`(pair, collider a, collider b)`; `a == b` for a
+/// self-colliding mesh), run: the surfaces of the colliders involved brought up to date
+/// first, at most `max_self_contacts` contacts each, the trackers' searches cut at the run's
+/// deadline under a time budget.
+fn tracked_jobs(cx: &mut TrackingContext, pairs: &[(u32, u32, u32)]) -> Vec<Job> {
+    let (seed, max) = (cx.config.seed, cx.config.max_self_contacts);
+    let deadline = tracking_deadline(&cx.config, &cx.diag);
+    let mut involved: Vec<u32> = pairs.iter().flat_map(|&(_, a, b)| [a, b]).collect();
     involved.sort_unstable();
     involved.dedup();
-    let entries: Vec<&ColliderEntry> = involved
-        .iter()
-        .map(|&i| &frame.entries[i as usize])
-        .collect();
-    update_surfaces(state, &entries, pool);
+    let colliders = &*cx.colliders;
+    let entries: Vec<&ColliderEntry> = involved.iter().map(|&i| colliders.entry(i)).collect();
+    let state = &mut *cx.state;
+    update_surfaces(state, &entries, &cx.pool);
     let mut jobs: Vec<Job> = pairs
         .iter()
-        .map(|&(a, b)| job(state, frame, a, b, seed))
+        .map(|&ends| job(state, colliders, ends, seed))
         .collect();
-    run_jobs(&mut jobs, frame, state, pool, max, deadline);
+    run_jobs(&mut jobs, colliders, state, &cx.pool, max, deadline);
     jobs
 }
 
-/// Merges finished jobs: outcomes in entity order, feature pairs recorded, trackers kept.
-fn finish_jobs(
-    jobs: Vec<Job>,
-    state: &mut TrackingState,
-    outcomes: &mut PairOutcomes,
-    features: &mut Query<&mut FeaturePairs>,
-    commands: &mut Commands,
-    diag: &mut CollisionDiagnostics,
-    method: Method,
-) {
+/// Records finished jobs: answers in pair order, feature pairs, trackers kept.
+fn finish_jobs(cx: &mut TrackingContext, jobs: Vec<Job>, method: Method) {
+    let run = cx.diag.frame;
+    let mut new = NewFeaturePairs::default();
     for job in jobs {
-        diag.counters.tracker_steps_cut += u64::from(job.tracker.stats().cut);
-        let (a, b) = job.key;
-        outcomes.outcomes.push(PairOutcome::exact(
-            (a, b),
-            method,
-            job.tracker.stats().evaluations,
-            1.0,
-            job.contacts,
-        ));
-        record_pairs(features, commands, a, b, job.pairs);
-        state.trackers.insert(job.key, job.tracker);
+        cx.diag.counters.tracker_steps_cut += u64::from(job.tracker.stats().cut);
+        let evaluations = job.tracker.stats().evaluations;
+        let o = PairOutcome::exact(job.key, method, evaluations, 1.0, job.contacts, run);
+        cx.pairs.answer(job.pair, o, None, run);
+        record_pairs(&mut cx.features, &mut new, job.key, &job.pairs);
+        cx.state.trackers.insert(job.key, job.tracker);
     }
+    new.insert(&mut cx.commands);
 }
 
 /// When the trackers of this run stop searching: under a time budget, what the run's target
@@ -462,30 +461,13 @@ fn tracking_deadline(config: &CollisionConfig, diag: &CollisionDiagnostics) -> O
 
 /// Tracked pairs: the stochastic tracker between the two meshes, in parallel per pair; its
 /// contacts become the pair's contacts, at most `max_self_contacts` of them.
-#[allow(clippy::too_many_arguments)]
-pub fn track_pairs(
-    frame: Res<ColliderFrame>,
-    config: Res<CollisionConfig>,
-    pool: Res<CollisionTaskPool>,
-    mut state: ResMut<TrackingState>,
-    mut outcomes: ResMut<PairOutcomes>,
-    mut features: Query<&mut FeaturePairs>,
-    mut commands: Commands,
-    mut diag: ResMut<CollisionDiagnostics>,
-) {
+pub fn track_pairs(mut cx: TrackingContext) {
     let start = Instant::now();
-    let pairs: Vec<(u32, u32)> = outcomes.tracked.iter().map(|p| (p.a, p.b)).collect();
-    let jobs = tracked_jobs(&mut state, &frame, &pool, &config, &diag, &pairs);
-    finish_jobs(
-        jobs,
-        &mut state,
-        &mut outcomes,
-        &mut features,
-        &mut commands,
-        &mut diag,
-        Method::Tracking,
-    );
-    diag.record(Stage::Tracking, start.elapsed(), pairs.len() as u64);
+    let pairs = tracked(&cx.pairs, false);
+    let jobs = tracked_jobs(&mut cx, &pairs);
+    finish_jobs(&mut cx, jobs, Method::Tracking);
+    cx.diag
+        .record(Stage::Tracking, start.elapsed(), pairs.len() as u64);
 }
 
 /// Run condition: something is being tracked (or was until now), so [`forget_untracked`]
@@ -496,24 +478,17 @@ pub fn holds_tracking_state(state: Res<TrackingState>) -> bool {
 
 /// Drops trackers and surfaces of entities that are no longer tracked (despawned, or moved to
 /// another fidelity), after the Tracking stage: memory stays bounded however long the app runs.
-pub fn forget_untracked(
-    frame: Res<ColliderFrame>,
-    outcomes: Res<PairOutcomes>,
-    mut state: ResMut<TrackingState>,
-) {
+pub fn forget_untracked(pairs: Res<PairTable>, mut state: ResMut<TrackingState>) {
     let mut live: EntityHashSet = EntityHashSet::default();
-    let mut pairs: std::collections::HashSet<(Entity, Entity)> = Default::default();
-    for o in &outcomes.outcomes {
-        if matches!(o.method, Method::Tracking | Method::SelfCollision) {
-            live.insert(o.a);
-            live.insert(o.b);
-            pairs.insert((o.a, o.b));
-        }
+    let mut keys: std::collections::HashSet<(Entity, Entity)> = Default::default();
+    for &p in &pairs.tracked {
+        let s = pairs.slot(p);
+        live.insert(s.a);
+        live.insert(s.b);
+        keys.insert((s.a, s.b));
     }
-    state.trackers.retain(|k, _| pairs.contains(k));
-    state
-        .surfaces
-        .retain(|e, _| live.contains(e) && frame.get(*e).is_some());
+    state.trackers.retain(|k, _| keys.contains(k));
+    state.surfaces.retain(|e, _| live.contains(e));
     let used: std::collections::HashSet<usize> = state
         .surfaces
         .values()

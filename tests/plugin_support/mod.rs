@@ -30,7 +30,12 @@ pub fn log_events(
 }
 
 /// A headless app: the plugin in `PostUpdate` with `config` and `threads`, the log in `Last`.
+/// Contact messages are on (the tests read contacts from the log).
 pub fn app_with(config: CollisionConfig, threads: usize) -> App {
+    let config = CollisionConfig {
+        contact_messages: true,
+        ..config
+    };
     let mut app = App::new();
     app.add_plugins(
         StochasticCollisionPlugin::in_schedule(PostUpdate)

@@ -1,0 +1,124 @@
+//! The plugin's configuration: budgets, ADB settings, contacts. A leaf module: it uses no
+//! other module of the plugin but the components' [`Fidelity`].
+use std::time::Duration;
+
+use bevy_ecs::prelude::*;
+
+use super::components::Fidelity;
+use crate::adb::{Decision, Order};
+
+/// How much work the collision stages (Prepare to Report) may do per run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FrameBudget {
+    /// No limit: ADB pairs run until their `p_min`/`k_min` rule settles them.
+    Unlimited,
+    /// A wall-clock budget for the collision stages (Prepare to Report). The narrow phase
+    /// measures what a test and an answer from memory cost, and what came after it in the
+    /// last run; it tests the exact pairs and then the most urgent others that fit in what is
+    /// left (aiming a little below the budget when runs overran), sharing node pairs among the
+    /// tested ADB pairs by priority. The others keep their last answer, one run older
+    /// ([`PairView::age`](super::PairView::age); an exact pair past its deadline gets one
+    /// from memory, [`Method::Coherence`](super::Method::Coherence)), and wait for a test,
+    /// first come first served. The Tracking stages (tracked pairs,
+    /// self-collision) share the budget: past the run's deadline each tracker does an eighth
+    /// of its work ([`Tracker::step_self_until`](crate::tracking::Tracker::step_self_until)).
+    /// Results then depend on timing: use `NodePairs` for reproducible runs.
+    Time(Duration),
+    /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by
+    /// priority. Deterministic (same results for any thread count and machine).
+    NodePairs(u64),
+}
+
+/// The plugin's configuration, a resource (change it at run time).
+#[derive(Resource, Debug, Clone, PartialEq)]
+pub struct CollisionConfig {
+    /// Budget of the collision stages per run.
+    pub budget: FrameBudget,
+    /// Fidelity of rigid colliders without a [`Fidelity`] component.
+    pub default_fidelity: Fidelity,
+    /// `k_min` of the ADB queries (pieces of evidence needed).
+    pub k_min: u32,
+    /// ADB traversals test the triangles of the leaf pairs they reach exactly: a hit is a
+    /// certain collision whose contact comes from the triangle pair (a good normal and depth);
+    /// without, contacts come from the most probable node pair.
+    pub adb_exact_leaves: bool,
+    /// How ADB traversals decide ([`Decision`]). With exact leaves the two rules cost the same
+    /// within the noise (the `accuracy_vs_time` report; the `profile` example's pile with
+    /// `--adb-decision`); [`Decision::Confidence`], the default, more often ends a colliding
+    /// query at an exact leaf hit, whose contact comes from the triangle pair.
+    pub adb_decision: Decision,
+    /// In which order ADB traversals expand node pairs ([`Order`]). The default,
+    /// [`Order::Straddle`], dives to a first intersecting triangle pair and, with exact leaves,
+    /// estimates only the pairs its evidence checks and its confidence need: the fastest
+    /// order on the `accuracy_vs_time` report's poses, at the same error. Without exact leaves
+    /// every pair is estimated whatever the order, and only the ranking differs.
+    pub adb_order: Order,
+    /// The confidence from which an ADB answer that its traversal did not settle (its slice
+    /// ran out, or leaf pairs were left to their estimates) counts as a collision
+    /// ([`AdbQuery::collide_at`](crate::adb::AdbQuery::collide_at); ½ by default, the fewest
+    /// errors). Lower it where a missed contact costs more than a false one, as the
+    /// `cannonball` example does for shots that would otherwise pass through the wall.
+    pub adb_collide_at: f64,
+    /// ADB queries first try the interpenetration certificate
+    /// ([`AdbQuery::interior_after`](crate::adb::AdbQuery::interior_after)): a deep overlap is
+    /// settled by a few dozen voxel lookups instead of a traversal, its contact the sample
+    /// found inside the other mesh. On by default. Turn it off for scenes of small objects
+    /// against thin parts (a ball against walls a few voxels thick): samples seldom land
+    /// inside such parts, so it settles little there and costs its lookups on every pair (the
+    /// `cannonball` example runs without it: half as much narrow-phase time again with it).
+    pub adb_interior: bool,
+    /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
+    /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
+    /// (the pairs tested were chosen by what a test costs; one cut short would be wasted),
+    /// less only when the tests' deadline is that close.
+    pub min_slice: u64,
+    /// Node pairs an ADB pair gets at most, however generous the budget.
+    pub max_slice: u64,
+    /// Seed of all randomness (per pair: `(seed, frame, entities)`), so results do not depend on
+    /// thread scheduling.
+    pub seed: u64,
+    /// Distance by which world boxes are inflated before the broad phase.
+    pub aabb_margin: f32,
+    /// How far a collider may move before the broad phase looks at it again, as a fraction
+    /// of its world box's largest extent: its broad-phase (fat) box is its world box grown
+    /// by this much and stretched along twice its last motion. Larger: fewer broad-phase
+    /// updates, more pairs to check for overlapping world boxes (a few nanoseconds each).
+    pub proxy_margin: f32,
+    /// Write a [`Contact`](super::Contact) message per contact point of every pair answered
+    /// in a run (off by default: contacts are read through
+    /// [`Collisions`](super::Collisions), and responses take them from the
+    /// [`ContactQueue`](super::ContactQueue)).
+    pub contact_messages: bool,
+    /// Contacts reported per pair with a deformable mesh at most (rigid pairs report the
+    /// first contact found).
+    pub max_contacts_per_pair: usize,
+    /// Contacts reported per self-colliding mesh at most.
+    pub max_self_contacts: usize,
+    /// Contacts the Response stage may consume per run (`None`: all of them). What is left
+    /// stays in the [`ContactQueue`] for the next run, highest priority first.
+    pub response_budget: Option<usize>,
+}
+
+impl Default for CollisionConfig {
+    fn default() -> Self {
+        Self {
+            budget: FrameBudget::Time(Duration::from_micros(2000)),
+            default_fidelity: Fidelity::Adb { p_min: 0.99 },
+            k_min: 10,
+            adb_exact_leaves: true,
+            adb_decision: Decision::Confidence,
+            adb_order: Order::Straddle,
+            adb_collide_at: 0.5,
+            adb_interior: true,
+            min_slice: 4,
+            max_slice: 4096,
+            seed: 0x5eed,
+            aabb_margin: 0.0,
+            proxy_margin: 0.1,
+            contact_messages: false,
+            max_contacts_per_pair: 64,
+            max_self_contacts: 256,
+            response_budget: None,
+        }
+    }
+}

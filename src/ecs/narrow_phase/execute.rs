@@ -1,0 +1,325 @@
+//! Executing a run of the narrow phase: the chosen pairs tested by their method, the others
+//! answered from memory, in parallel runs of jobs, each writing its own answers in job order.
+use std::cell::RefCell;
+use std::time::{Duration, Instant};
+
+use smallvec::SmallVec;
+
+use super::super::budget::SliceShare;
+use super::super::config::CollisionConfig;
+use super::super::contact::{
+    bounds_contact, interpenetration_contact, node_contact, triangle_pair_contact,
+};
+use super::super::pairs::{PairTable, Record};
+use super::super::prepare::{ColliderEntry, ColliderTable};
+use super::memory::exact_from_memory;
+use super::outcome::{Method, PairOutcome};
+use super::plan::Job;
+use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
+use crate::bvh::{QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with};
+
+#[derive(Default)]
+struct Workspaces {
+    exact: QueryWorkspace,
+    adb: AdbWorkspace,
+    pairs: Vec<TrianglePair>,
+}
+
+thread_local! {
+    static WORKSPACES: RefCell<Workspaces> = RefCell::new(Workspaces::default());
+}
+
+/// Runs `f` with this thread's reusable query workspaces.
+pub(crate) fn with_workspaces<R>(
+    f: impl FnOnce(&mut QueryWorkspace, &mut AdbWorkspace, &mut Vec<TrianglePair>) -> R,
+) -> R {
+    WORKSPACES.with(|w| {
+        let w = &mut *w.borrow_mut();
+        f(&mut w.exact, &mut w.adb, &mut w.pairs)
+    })
+}
+
+/// What a job's run made of it.
+#[derive(Debug, Clone)]
+pub(crate) enum Answer {
+    /// An answer computed in this run, and the memory it leaves (`None`: the pair's memory
+    /// stays as it is).
+    Computed(PairOutcome, Option<Record>),
+    /// Not answered: a deadline passed before its test (the last answer stands).
+    Kept,
+}
+
+/// What a run of jobs did: its answers by kind, its work, and the time its thread spent in
+/// tests and in answers from memory.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct RunCounts {
+    pub node_pairs: u64,
+    pub exact_node_pairs: u64,
+    pub exact_pairs: u64,
+    pub budget_exhausted: u64,
+    pub coherence: u64,
+    pub cached: u64,
+    pub tested: u64,
+    pub test_time: Duration,
+    pub memory_time: Duration,
+}
+
+impl RunCounts {
+    pub fn add(self, o: &Self) -> Self {
+        Self {
+            node_pairs: self.node_pairs + o.node_pairs,
+            exact_node_pairs: self.exact_node_pairs + o.exact_node_pairs,
+            exact_pairs: self.exact_pairs + o.exact_pairs,
+            budget_exhausted: self.budget_exhausted + o.budget_exhausted,
+            coherence: self.coherence + o.coherence,
+            cached: self.cached + o.cached,
+            tested: self.tested + o.tested,
+            test_time: self.test_time + o.test_time,
+            memory_time: self.memory_time + o.memory_time,
+        }
+    }
+
+    fn count(&mut self, answer: &Answer, tested: bool) {
+        let Answer::Computed(o, _) = answer else {
+            self.coherence += 1;
+            return;
+        };
+        self.node_pairs += o.node_pairs;
+        if o.method == Method::Exact {
+            self.exact_node_pairs += o.node_pairs;
+            self.exact_pairs += u64::from(tested);
+        }
+        self.budget_exhausted += u64::from(o.budget_exhausted);
+        self.coherence += u64::from(o.method == Method::Coherence);
+        self.cached += u64::from(o.method == Method::Cached);
+        self.tested += u64::from(tested && matches!(o.method, Method::Adb | Method::Exact));
+    }
+}
+
+/// One run of jobs and the slots its answers go to.
+pub(crate) struct ChunkWork<'a> {
+    pub jobs: &'a [Job],
+    pub answers: &'a mut [Answer],
+    pub counts: &'a mut RunCounts,
+}
+
+/// When the tests of a run stop (`None`: never): the optional ones, and the exact ones (later:
+/// they were asked for, so only an overload of exact pairs alone cuts them).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Deadlines {
+    pub others: Option<Instant>,
+    pub exact: Option<Instant>,
+}
+
+impl Deadlines {
+    pub fn at(others: Instant, exact: Instant) -> Self {
+        Self {
+            others: Some(others),
+            exact: Some(exact),
+        }
+    }
+}
+
+/// One thread's scratch for the tests of a run: the query settings, the workspaces, and the
+/// most node pairs the next ADB test may visit (what is left of the time for tests).
+struct Scratch<'w> {
+    query: AdbQuery,
+    exact: &'w mut QueryWorkspace,
+    adb: &'w mut AdbWorkspace,
+    pairs: &'w mut Vec<TrianglePair>,
+    node_cap: u64,
+}
+
+/// What every run of jobs reads.
+pub(crate) struct Context<'a> {
+    pub colliders: &'a ColliderTable,
+    pub pairs: &'a PairTable,
+    pub config: &'a CollisionConfig,
+    /// This run's number.
+    pub run: u64,
+    /// The share of the node-pair budget among the tested ADB pairs (`None`: unlimited).
+    pub share: Option<SliceShare>,
+    pub deadlines: Deadlines,
+    /// The measured rate of the tests (time mode), for the cap of each test.
+    pub node_pairs_per_us: f64,
+}
+
+impl Context<'_> {
+    /// The ADB query settings of this run.
+    fn query(&self) -> AdbQuery {
+        AdbQuery {
+            k_min: self.config.k_min,
+            exact_leaves: self.config.adb_exact_leaves,
+            decision: self.config.adb_decision,
+            order: self.config.adb_order,
+            collide_at: self.config.adb_collide_at,
+            interior_after: self.config.adb_interior.then_some(0),
+            ..AdbQuery::default()
+        }
+    }
+
+    fn ends(&self, job: &Job) -> (&ColliderEntry, &ColliderEntry) {
+        (
+            self.colliders.entry(job.body_a),
+            self.colliders.entry(job.body_b),
+        )
+    }
+
+    /// Answers a run of jobs into its slots: first the chosen exact ones are tested, then in
+    /// job order the other chosen ones are tested and the rest answered (apart, or from
+    /// memory). Past a deadline, chosen jobs are answered from memory too.
+    pub fn run_chunk(&self, w: &mut ChunkWork) {
+        let start = Instant::now();
+        let mut counts = RunCounts::default();
+        with_workspaces(|exact, adb, pairs| {
+            let s = &mut Scratch {
+                query: self.query(),
+                exact,
+                adb,
+                pairs,
+                node_cap: u64::MAX,
+            };
+            let is_exact = |j: &Job| j.chosen && j.method == Method::Exact;
+            let mut late = false;
+            for (i, job) in w.jobs.iter().enumerate().filter(|(_, j)| is_exact(j)) {
+                late = late || self.deadlines.exact.is_some_and(|d| Instant::now() > d);
+                let (answer, tested) = self.answer(job, late, s);
+                counts.count(&answer, tested);
+                w.answers[i] = answer;
+            }
+            counts.test_time = start.elapsed();
+            let mut late = false;
+            for (i, job) in w.jobs.iter().enumerate().filter(|(_, j)| !is_exact(j)) {
+                let (answer, tested) = if job.chosen {
+                    let t = Instant::now();
+                    if let Some(d) = self.deadlines.others {
+                        // No test runs far past the deadline: an ADB test visits at most
+                        // the node pairs the measured rate gets done before it.
+                        let left_us = d.saturating_duration_since(t).as_secs_f64() * 1e6;
+                        late = late || left_us <= 0.0;
+                        s.node_cap = (left_us * self.node_pairs_per_us) as u64;
+                    }
+                    let answer = self.answer(job, late, s);
+                    counts.test_time += t.elapsed();
+                    answer
+                } else {
+                    self.answer(job, true, s)
+                };
+                counts.count(&answer, tested);
+                w.answers[i] = answer;
+            }
+        });
+        counts.memory_time = start.elapsed().saturating_sub(counts.test_time);
+        *w.counts = counts;
+    }
+
+    /// The answer of a job (apart, bounds-only, tested, or past a deadline: from memory for
+    /// an exact pair, kept for the others) and whether it was tested.
+    fn answer(&self, job: &Job, late: bool, s: &mut Scratch) -> (Answer, bool) {
+        let (ea, eb) = self.ends(job);
+        let ends = (ea.entity, eb.entity);
+        if job.apart {
+            let o =
+                PairOutcome::exact(ends, job.method, 0, job.priority, SmallVec::new(), self.run);
+            let r = Record::of_test(job, &o, (ea, eb), self.run);
+            return (Answer::Computed(o, Some(r)), false);
+        }
+        if late && job.method == Method::Exact {
+            let memory = self.pairs.hot[job.pair as usize].memory.as_ref();
+            let slot = self.pairs.slot(job.pair);
+            let (o, r) = exact_from_memory(job, memory, slot, (ea, eb), self.run);
+            return (Answer::Computed(o, r), false);
+        }
+        if late && job.method != Method::Bounds {
+            return (Answer::Kept, false);
+        }
+        let o = self.test(job, (ea, eb), s);
+        let r = Record::of_test(job, &o, (ea, eb), self.run);
+        (Answer::Computed(o, Some(r)), true)
+    }
+
+    /// Tests a job by its method.
+    fn test(
+        &self,
+        job: &Job,
+        (ea, eb): (&ColliderEntry, &ColliderEntry),
+        s: &mut Scratch,
+    ) -> PairOutcome {
+        let ends = (ea.entity, eb.entity);
+        let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
+        match job.method {
+            Method::Bounds => {
+                let contacts = smallvec::smallvec![bounds_contact(ea, eb)];
+                PairOutcome::exact(ends, Method::Bounds, 0, job.priority, contacts, self.run)
+            }
+            Method::Exact if ea.is_rigid() && eb.is_rigid() => {
+                // First hit only (stops early): one contact, as for ADB pairs.
+                let hit = intersects_with(ma, &ea.pose, mb, &eb.pose, &Default::default(), s.exact);
+                let contacts = hit
+                    .witness
+                    .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
+                    .into_iter()
+                    .collect();
+                let nodes = hit.node_pairs_visited;
+                PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts, self.run)
+            }
+            Method::Exact => {
+                s.pairs.clear();
+                intersecting_pairs(ma, &ea.pose, mb, &eb.pose, s.exact, s.pairs);
+                let contacts = spread(s.pairs, self.config.max_contacts_per_pair)
+                    .map(|t| triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t))
+                    .collect();
+                let nodes = s.exact.node_pairs_visited();
+                PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts, self.run)
+            }
+            Method::Adb => {
+                let (Some(ta), Some(tb)) = (ea.geometry.adb(), eb.geometry.adb()) else {
+                    unreachable!("ADB pairs are rigid (planned so)")
+                };
+                s.query.p_min = job.p_min;
+                s.query.budget = match self.share {
+                    None => Budget::Unlimited,
+                    Some(share) => {
+                        let cap = s.node_cap.max(self.config.min_slice);
+                        Budget::NodePairs(share.slice(job.priority).min(cap))
+                    }
+                };
+                let r = adb_intersects(ta, &ea.pose, tb, &eb.pose, &s.query, s.adb);
+                let mut out = PairOutcome::exact(
+                    ends,
+                    Method::Adb,
+                    r.node_pairs_visited,
+                    job.priority,
+                    SmallVec::new(),
+                    self.run,
+                );
+                out.collides = r.collides;
+                out.probability = r.probability;
+                out.budget_exhausted = r.budget_exhausted;
+                if r.collides {
+                    out.contacts.push(match (r.witness, r.interpenetration) {
+                        (Some(w), Some(c)) => interpenetration_contact(&w, &c),
+                        (Some(w), None) => match w.triangles {
+                            Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
+                            None => node_contact(ma, &ea.pose, mb, &eb.pose, &w, r.probability),
+                        },
+                        (None, _) => bounds_contact(ea, eb),
+                    });
+                }
+                out
+            }
+            Method::Tracking | Method::SelfCollision | Method::Coherence | Method::Cached => {
+                unreachable!("not a narrow-phase test (planned so)")
+            }
+        }
+    }
+}
+
+/// At most `max` of `pairs`, evenly spread (deterministic).
+pub(crate) fn spread(
+    pairs: &[TrianglePair],
+    max: usize,
+) -> impl Iterator<Item = TrianglePair> + '_ {
+    let step = pairs.len().div_ceil(max.max(1)).max(1);
+    pairs.iter().step_by(step).copied()
+}

@@ -1,0 +1,125 @@
+//! Answers from memory. A pair worked on but not tested in a run keeps its last answer, one
+//! run older ([`PairTable::keep`](super::super::pairs::PairTable)); only an exact pair that a
+//! deadline left untested gets an answer computed from its memory ([`Method::Coherence`]), as
+//! level geometry must hold whatever the load.
+use glam::Vec3;
+use smallvec::{SmallVec, smallvec};
+
+use super::super::contact::{ContactPoint, bounds_contact, triangle_pair_contact};
+use super::super::pairs::{PairSlot, Record};
+use super::super::prepare::ColliderEntry;
+use super::outcome::{Method, PairOutcome};
+use super::plan::Job;
+use crate::bvh::root_boxes_overlap;
+
+/// What a pair's last test found (what planning reads of it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PairMemory {
+    pub probability: f64,
+    pub collides: bool,
+    /// The answer holds for as long as neither collider changes: a test of two rigid
+    /// colliders that settled (not cut by its budget).
+    pub settled: bool,
+    /// Runs answered from memory since the test.
+    pub stale: u32,
+    /// The run whose poses the answer was computed at.
+    pub tested_run: u64,
+    /// How it was asked for: the pair's method and `p_min` then (another fidelity asks anew).
+    pub method: Method,
+    pub p_min: f64,
+}
+
+impl Record {
+    /// What a test in `run` leaves.
+    pub fn of_test(
+        job: &Job,
+        o: &PairOutcome,
+        (ea, eb): (&ColliderEntry, &ColliderEntry),
+        run: u64,
+    ) -> Self {
+        Self {
+            memory: PairMemory {
+                probability: o.probability,
+                collides: o.collides,
+                settled: !o.budget_exhausted && ea.is_rigid() && eb.is_rigid(),
+                stale: 0,
+                tested_run: run,
+                method: job.method,
+                p_min: job.p_min,
+            },
+            contact: o.contacts.first().copied(),
+            offset: eb.pose.translation - ea.pose.translation,
+        }
+    }
+}
+
+/// The confidence of an answer `memory` of a pair whose colliders were `offset` apart at the
+/// test, now: the tested one, drawn towards ½ as the colliders moved relative to each other
+/// since (by `e^(−drift / scale)`, the scale half the smaller collider's box size: a pair that
+/// moved by that much is answered at about `½ + (p − ½)/e`).
+pub(crate) fn decayed_probability(
+    memory: &PairMemory,
+    offset: Vec3,
+    (ea, eb): (&ColliderEntry, &ColliderEntry),
+) -> f64 {
+    let drift = (eb.pose.translation - ea.pose.translation - offset).length();
+    let size = |e: &ColliderEntry| e.aabb.extents().max_element();
+    let scale = (0.5 * size(ea).min(size(eb))).max(1e-6);
+    0.5 + (memory.probability - 0.5) * f64::from((-drift / scale).exp())
+}
+
+/// The answer of an exact pair that a deadline left untested in `run`, from its memory
+/// ([`Method::Coherence`]): a pair that collided keeps colliding, its contact re-measured on
+/// its triangle pair at the current poses (a box contact stays, without its depth); one that
+/// did not, or was never tested, collides when its oriented root boxes overlap, with
+/// probability ½ and a box contact of half the depth (level geometry must not be passed
+/// through); otherwise "not colliding". The memory stays (one run staler).
+pub(crate) fn exact_from_memory(
+    job: &Job,
+    memory: Option<&PairMemory>,
+    slot: &PairSlot,
+    (ea, eb): (&ColliderEntry, &ColliderEntry),
+    run: u64,
+) -> (PairOutcome, Option<Record>) {
+    let mut out = PairOutcome {
+        a: ea.entity,
+        b: eb.entity,
+        method: Method::Coherence,
+        collides: false,
+        probability: 0.5,
+        node_pairs: 0,
+        budget_exhausted: false,
+        priority: job.priority,
+        contacts: SmallVec::new(),
+        run,
+        computed_run: memory.map_or(run, |m| m.tested_run),
+    };
+    let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
+    match memory {
+        Some(m) if m.collides => {
+            out.collides = true;
+            out.probability = decayed_probability(m, slot.offset, (ea, eb));
+            out.contacts.extend(slot.contact.map(|c| match c.triangles {
+                Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
+                None => ContactPoint { depth: 0.0, ..c },
+            }));
+        }
+        _ if root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) => {
+            out.collides = true;
+            let mut c = bounds_contact(ea, eb);
+            c.depth *= 0.5;
+            out.contacts = smallvec![c];
+        }
+        Some(m) => out.probability = decayed_probability(m, slot.offset, (ea, eb)),
+        None => {}
+    }
+    let record = memory.map(|m| Record {
+        memory: PairMemory {
+            stale: m.stale + 1,
+            ..*m
+        },
+        contact: slot.contact,
+        offset: slot.offset,
+    });
+    (out, record)
+}

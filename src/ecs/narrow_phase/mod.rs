@@ -1,0 +1,336 @@
+//! Narrow phase: the active pairs of the [`PairTable`] answered by their fidelity, in
+//! parallel, inside the budget.
+//!
+//! Only active pairs are worked on (new, moved, unsettled, or waiting for a test): a pair
+//! whose colliders did not change keeps its settled answer and costs nothing. Each active
+//! pair gets a priority ([`pair_priority`](super::pair_priority): last confidence,
+//! closeness, speed, waiting). Under a time budget the exact pairs and the most urgent
+//! others that fit (by the measured cost of a test) are tested and the rest answered from
+//! memory ([`Method::Coherence`]); tested ADB pairs get node-pair slices of the budget in
+//! proportion to their priority, and an ADB traversal stops at its slice and reports its
+//! best estimate. Runs of pairs are planned, then tested or answered from memory, on the task
+//! pool, each thread with its own workspaces and each run writing its answers in place; they
+//! are recorded in the table in pair order, so the outcome is the same for any number of
+//! threads.
+mod costs;
+mod execute;
+mod memory;
+mod outcome;
+mod plan;
+
+use std::time::{Duration, Instant};
+
+use bevy_ecs::prelude::*;
+
+use super::budget::{SliceShare, WorkRate};
+use super::config::{CollisionConfig, FrameBudget};
+use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::pairs::{PairEnds, PairTable, stamp};
+use super::pool::CollisionTaskPool;
+use super::prepare::ColliderTable;
+use costs::PairCosts;
+use execute::{Answer, ChunkWork, Context, Deadlines, RunCounts};
+pub(crate) use execute::{spread, with_workspaces};
+pub(crate) use memory::{PairMemory, decayed_probability};
+pub use outcome::{Method, PairOutcome};
+use plan::{Job, PlanCounts, choose_tests, plan_jobs, priority_cut, tests_that_fit};
+
+/// What the narrow phase keeps between runs: the measured costs and rates, reused buffers.
+#[derive(Resource, Debug, Default)]
+pub struct NarrowPhaseState {
+    jobs: Vec<Job>,
+    /// Pairs tested in the last run.
+    last_tests: usize,
+    found: Vec<Vec<u32>>,
+    work: Vec<Job>,
+    answers: Vec<Answer>,
+    plan_counts: Vec<PlanCounts>,
+    run_counts: Vec<RunCounts>,
+    rate: WorkRate,
+    costs: PairCosts,
+    exact_node_pairs: f64,
+}
+
+/// Answers the active pairs (all but tracked ones) in parallel.
+///
+/// Under a time budget, the pairs tested are the most urgent ones that fit (by the measured
+/// cost of a test); the others are answered from memory ([`Method::Coherence`]) and wait less
+/// next time. The deadline stays as a safety net for the tests themselves.
+pub fn narrow_phase(
+    colliders: Res<ColliderTable>,
+    mut pairs: ResMut<PairTable>,
+    config: Res<CollisionConfig>,
+    pool: Res<CollisionTaskPool>,
+    mut state: ResMut<NarrowPhaseState>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    let start = Instant::now();
+    let state = &mut *state;
+    let run = diag.frame;
+    let config_changed = config.is_changed();
+    // Under a time budget, the waiting pairs taken are about as many as could be tested: twice
+    // the most the budget holds at the measured cost of a test per thread, or of what was
+    // tested last time, and a few more (the rest waits).
+    let quota = match config.budget {
+        FrameBudget::Time(budget) => {
+            let fit = budget.as_secs_f64() * 1e6 / state.costs.test_us.max(0.1);
+            let fit = fit as usize * pool.threads();
+            Some(2 * fit.max(state.last_tests) + 64)
+        }
+        _ => None,
+    };
+    activate(
+        &colliders,
+        &mut pairs,
+        &pool,
+        &mut state.found,
+        quota,
+        run,
+        config_changed,
+    );
+    // Each active pair's job, planned in parallel over runs of them.
+    let jobs = &mut state.jobs;
+    jobs.clear();
+    jobs.resize(pairs.active.len(), Job::new(0, 0, 0));
+    let chunk = pool.chunk_size(jobs.len(), 256);
+    let plans = &mut state.plan_counts;
+    plans.clear();
+    plans.resize(jobs.len().div_ceil(chunk), PlanCounts::default());
+    {
+        let (colliders, pairs) = (&*colliders, &*pairs);
+        let mut work: Vec<_> = jobs
+            .chunks_mut(chunk)
+            .zip(pairs.active.chunks(chunk))
+            .zip(plans.iter_mut())
+            .collect();
+        pool.for_each_mut(&mut work, 1, |((c, active), counts)| {
+            for (job, &p) in c.iter_mut().zip(active.iter()) {
+                let e = pairs.ends(p);
+                *job = Job::new(p, e.body_a, e.body_b);
+            }
+            **counts = plan_jobs(c, colliders, pairs, run, config_changed);
+        });
+    }
+    let plan = plans.iter().fold(PlanCounts::default(), PlanCounts::add);
+    // Tracked pairs and self-collisions go to the Tracking stage; the others keep their order.
+    if plan.tracked > 0 {
+        let tracked = &mut pairs.tracked;
+        jobs.retain(|j| {
+            if j.tracked() {
+                tracked.push(j.pair);
+            }
+            !j.tracked()
+        });
+    }
+    // Which pairs are tested: all of them, or under a time budget the exact pairs (asked for:
+    // level geometry, things that must not pass through each other) and the most urgent of
+    // the others that fit.
+    let (cut, deadlines, nodes) = match config.budget {
+        FrameBudget::Time(budget) => {
+            let target = diag.time_target(budget);
+            let testable = plan.testable as usize;
+            let now = Instant::now();
+            let costs = &state.costs;
+            let (count, deadline) = tests_that_fit(target, testable, jobs.len(), &diag, costs, now);
+            let exact = testable - plan.optional.iter().sum::<u32>() as usize;
+            let optional = count.saturating_sub(exact);
+            // The ADB node pairs the measured rate gets done in the time for tests.
+            let tests_us = deadline.saturating_duration_since(now).as_secs_f64() * 1e6;
+            let rate = state.rate.node_pairs_per_us;
+            let nodes = (tests_us * rate - state.exact_node_pairs).max(0.0);
+            let cut = priority_cut(&plan.optional, optional);
+            // Exact pairs may also use the time the answers from memory were given.
+            let answers = Duration::from_secs_f64(jobs.len() as f64 * costs.memory_us * 1e-6);
+            let deadlines = Deadlines::at(deadline, deadline + answers);
+            (Some(cut), deadlines, Some(nodes as u64))
+        }
+        FrameBudget::NodePairs(n) => (None, Deadlines::default(), Some(n)),
+        FrameBudget::Unlimited => (None, Deadlines::default(), None),
+    };
+    let chosen_at = Instant::now();
+    let chosen = choose_tests(jobs, cut);
+    // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
+    // In time mode the tests were chosen by what a test costs, so each gets enough to settle
+    // (an eighth of the largest slice at least): a test cut short is wasted, tested again
+    // next run and never answered from memory; the deadline still bounds the whole.
+    let min_slice = match config.budget {
+        FrameBudget::Time(_) => config.min_slice.max(config.max_slice / 8),
+        _ => config.min_slice,
+    };
+    let share = nodes.map(|total| {
+        SliceShare::from_sum(
+            chosen.adb,
+            chosen.adb_priority,
+            total,
+            min_slice,
+            config.max_slice,
+        )
+    });
+    // The jobs that need work: the chosen tests, the pairs whose boxes came apart, the
+    // bounds-only pairs. The others keep their last answer, as it is (cached: nothing moved)
+    // or one run older.
+    let work = &mut state.work;
+    work.clear();
+    for job in jobs.iter() {
+        if job.chosen || job.apart || job.method == Method::Bounds {
+            work.push(*job);
+        } else {
+            pairs.keep(job.pair, job.cached, run);
+        }
+    }
+    let kept = (jobs.len() - work.len()) as u64;
+    // Tests in parallel, each run of jobs writing its own slots.
+    let n = work.len();
+    let answers = &mut state.answers;
+    answers.clear();
+    answers.resize(n, Answer::Kept);
+    let chunk = pool.chunk_size(n, 8);
+    let counts = &mut state.run_counts;
+    counts.clear();
+    counts.resize(n.div_ceil(chunk), RunCounts::default());
+    let run_start = Instant::now();
+    {
+        let ctx = Context {
+            colliders: &colliders,
+            pairs: &pairs,
+            config: &config,
+            run,
+            share,
+            deadlines,
+            node_pairs_per_us: state.rate.node_pairs_per_us,
+        };
+        let mut chunks: Vec<_> = work
+            .chunks(chunk)
+            .zip(answers.chunks_mut(chunk))
+            .zip(counts.iter_mut())
+            .map(|((jobs, answers), counts)| ChunkWork {
+                jobs,
+                answers,
+                counts,
+            })
+            .collect();
+        pool.for_each_mut(&mut chunks, 1, |w| ctx.run_chunk(w));
+    }
+    let wall = run_start.elapsed();
+    for (job, answer) in work.iter().zip(answers.drain(..)) {
+        match answer {
+            Answer::Computed(outcome, record) => pairs.answer(job.pair, outcome, record, run),
+            Answer::Kept => pairs.keep(job.pair, false, run),
+        }
+    }
+    let total = counts.iter().fold(RunCounts::default(), RunCounts::add);
+    state.last_tests = total.tested as usize;
+    // Wall-clock costs: the threads' times over the parallelism the section had.
+    let busy = total.test_time + total.memory_time;
+    let parallel =
+        (busy.as_secs_f64() / wall.as_secs_f64().max(1e-9)).clamp(1.0, pool.threads() as f64);
+    let test_time = total.test_time.div_f64(parallel);
+    // What the jobs cost besides their tests once chosen (answers kept, apart, recorded).
+    let bookkeeping = chosen_at.elapsed().saturating_sub(test_time);
+    let c = &mut diag.counters;
+    c.node_pairs += total.node_pairs;
+    c.adb_pairs += u64::from(plan.adb);
+    c.exact_pairs += total.exact_pairs;
+    c.budget_exhausted_pairs += total.budget_exhausted;
+    c.coherence_pairs += total.coherence + kept;
+    c.cached_pairs += total.cached;
+    c.tested_pairs += total.tested;
+    c.test_time += test_time;
+    state
+        .rate
+        .update(total.node_pairs, test_time.as_secs_f64() * 1e6);
+    state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * total.exact_node_pairs as f64;
+    let costs = &mut state.costs;
+    PairCosts::learn(&mut costs.test_us, total.tested as usize, test_time);
+    PairCosts::learn(&mut costs.memory_us, jobs.len(), bookkeeping);
+    diag.record(Stage::NarrowPhase, start.elapsed(), n as u64);
+    diag.narrow_phase_ended();
+}
+
+/// Builds this run's active list: every pair after a change of configuration; otherwise the
+/// pairs of the colliders that changed in this run and the pairs left pending by the last
+/// run (new, unsettled, answered from memory, tracked), each once, in an order that depends
+/// only on the history of the table.
+///
+/// Most pairs of a moving collider are close but apart (their fat boxes overlap, their world
+/// boxes do not): where such a pair was apart already, its answer stands, confirmed, without
+/// a job. When most colliders changed, every pair is checked in one parallel pass in slot
+/// order; otherwise the changed colliders' pairs are.
+fn activate(
+    colliders: &ColliderTable,
+    pairs: &mut PairTable,
+    pool: &CollisionTaskPool,
+    found: &mut Vec<Vec<u32>>,
+    quota: Option<usize>,
+    run: u64,
+    config_changed: bool,
+) {
+    pairs.active.clear();
+    let mut pending = std::mem::take(&mut pairs.pending);
+    let (boxes, now) = (colliders.boxes(), stamp(run));
+    let check = |p: u32, e: &mut PairEnds, active: &mut Vec<u32>| {
+        if e.quiet && !boxes[e.body_a as usize].intersects(&boxes[e.body_b as usize]) {
+            e.checked_run = now;
+        } else if e.active_run != now {
+            e.active_run = now;
+            active.push(p);
+        }
+    };
+    let changed = colliders.changed();
+    if config_changed {
+        for i in 0..pairs.slots.len() as u32 {
+            pairs.activate(i, run);
+        }
+    } else if changed.len() * 4 > colliders.len() {
+        let chunk = pool.chunk_size(pairs.ends.len(), 4096);
+        found.resize_with(pairs.ends.len().div_ceil(chunk), Vec::new);
+        let mut work: Vec<_> = pairs
+            .ends
+            .chunks_mut(chunk)
+            .zip(found.iter_mut())
+            .enumerate()
+            .map(|(k, (ends, out))| (k * chunk, ends, out))
+            .collect();
+        pool.for_each_mut(&mut work, 1, |(first, ends, out)| {
+            out.clear();
+            for (k, e) in ends.iter_mut().enumerate() {
+                let (a, b) = (&boxes[e.body_a as usize], &boxes[e.body_b as usize]);
+                if e.live && (a.stamp == now || b.stamp == now) {
+                    check((*first + k) as u32, e, out);
+                }
+            }
+        });
+        drop(work);
+        for f in found.iter() {
+            pairs.active.extend_from_slice(f);
+        }
+    } else {
+        for &body in changed {
+            for &p in colliders.entry(body).pair_slots() {
+                check(p, &mut pairs.ends[p as usize], &mut pairs.active);
+            }
+        }
+    }
+    for &p in &pending {
+        pairs.activate(p, run);
+    }
+    // The longest waiting pairs, as many as this run may test.
+    let quota = quota.unwrap_or(usize::MAX);
+    let mut taken = 0;
+    while taken < quota
+        && let Some(p) = pairs.waiting.pop_front()
+    {
+        let e = &mut pairs.ends[p as usize];
+        if e.live && e.waiting {
+            e.waiting = false;
+            taken += 1;
+            pairs.activate(p, run);
+        }
+    }
+    // Answers of this run put pairs on the pending list again, for the next run.
+    for &p in &pending {
+        pairs.ends[p as usize].pending_run = now.wrapping_sub(1);
+    }
+    pending.clear();
+    pairs.pending = pending;
+}

@@ -1,0 +1,354 @@
+//! Planning a run of the narrow phase: each active pair's method, whether its last answer
+//! still holds, its priority; which pairs are tested under the budget.
+use std::time::{Duration, Instant};
+
+use super::super::budget::pair_priority;
+use super::super::components::Fidelity;
+use super::super::diagnostics::CollisionDiagnostics;
+use super::super::pairs::PairTable;
+use super::super::prepare::ColliderTable;
+use super::costs::PairCosts;
+use super::outcome::Method;
+
+/// One active pair's work in this run.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Job {
+    /// The pair's slot in the [`PairTable`].
+    pub pair: u32,
+    /// The colliders' slots in the [`ColliderTable`] (the first is the smaller entity's).
+    pub body_a: u32,
+    pub body_b: u32,
+    pub method: Method,
+    /// Priority bucket (0: highest), for choosing the pairs tested under a time budget.
+    pub bucket: u8,
+    /// The world boxes are apart: certainly not colliding, no test needed.
+    pub apart: bool,
+    /// The last answer is settled and still holds (answered from memory, no test needed).
+    pub cached: bool,
+    /// Tested in this run ([`choose_tests`]).
+    pub chosen: bool,
+    pub p_min: f64,
+    pub priority: f32,
+}
+
+impl Job {
+    /// A job not planned yet.
+    pub fn new(pair: u32, body_a: u32, body_b: u32) -> Self {
+        Self {
+            pair,
+            body_a,
+            body_b,
+            method: Method::Tracking,
+            bucket: 0,
+            apart: false,
+            cached: false,
+            chosen: false,
+            p_min: 1.0,
+            priority: 0.0,
+        }
+    }
+
+    /// Needs a test (not apart, not answered from a still valid memory, not bounds-only).
+    pub fn testable(&self) -> bool {
+        !self.apart && !self.cached && self.method != Method::Bounds
+    }
+
+    /// Needs a test, and is tested only if the budget allows (not an exact pair).
+    pub fn optional(&self) -> bool {
+        self.testable() && self.method != Method::Exact
+    }
+
+    /// Handed over to the Tracking stage (tracked pairs, self-collision).
+    pub fn tracked(&self) -> bool {
+        !self.apart && matches!(self.method, Method::Tracking | Method::SelfCollision)
+    }
+}
+
+/// Fills in each job of a run of active pairs: its method (`Tracking` and `SelfCollision`:
+/// handed over to the Tracking stage), whether the boxes are apart, whether the last answer
+/// still holds, and its priority (`run`: this run's number; after a change of configuration
+/// no answer is reused as is).
+pub(crate) fn plan_jobs(
+    jobs: &mut [Job],
+    colliders: &ColliderTable,
+    pairs: &PairTable,
+    run: u64,
+    config_changed: bool,
+) -> PlanCounts {
+    let plans = colliders.plans();
+    for job in jobs.iter_mut() {
+        let (ea, eb) = (&plans[job.body_a as usize], &plans[job.body_b as usize]);
+        if job.body_a == job.body_b {
+            job.method = Method::SelfCollision;
+            continue;
+        }
+        (job.method, job.p_min) = match ea.fidelity.combine(eb.fidelity) {
+            Fidelity::Tracking { .. } => (Method::Tracking, 1.0),
+            Fidelity::Bounds => (Method::Bounds, 1.0),
+            Fidelity::Exact => (Method::Exact, 1.0),
+            Fidelity::Adb { p_min } if ea.rigid && eb.rigid => (Method::Adb, p_min),
+            Fidelity::Adb { .. } => (Method::Exact, 1.0),
+        };
+        if !ea.aabb.intersects(&eb.aabb) {
+            job.apart = true;
+            continue;
+        }
+        if job.method == Method::Tracking {
+            continue;
+        }
+        let memory = pairs.hot(job.pair).memory.as_ref();
+        // Settled, asked for the same way, the configuration the same, and neither pose nor
+        // geometry changed since: the answer still holds.
+        job.cached = !config_changed
+            && memory.is_some_and(|m| {
+                m.settled
+                    && (m.method, m.p_min) == (job.method, job.p_min)
+                    && m.tested_run >= ea.still_since.max(eb.still_since)
+            });
+        // A cached answer that does not collide needs no priority (no test, no contact).
+        if job.cached && !memory.is_some_and(|m| m.collides) {
+            continue;
+        }
+        let mut priority = pair_priority(
+            memory.map(|m| m.probability),
+            &ea.aabb,
+            &eb.aabb,
+            eb.motion - ea.motion,
+        );
+        if job.method == Method::Exact {
+            // Exact pairs were asked for: tested before the others.
+            priority *= 4.0;
+        }
+        // New pairs first (collisions start there); a pair answered from memory waits less
+        // each run, so none starves under overload.
+        match memory {
+            None => priority *= 4.0,
+            Some(m) => priority *= (1 + m.stale.min(15)) as f32,
+        }
+        // Both stopped (unchanged since the last run) but the answer is not settled: one test
+        // now is answered from memory for as long as they rest.
+        let still = ea.still_since < run && eb.still_since < run;
+        if still && memory.is_some_and(|m| !m.settled) {
+            priority *= 4.0;
+        }
+        job.priority = priority;
+        job.bucket = priority_bucket(priority);
+    }
+    PlanCounts::count(jobs)
+}
+
+/// Number of priority buckets ([`priority_bucket`]).
+pub(crate) const BUCKETS: usize = 32;
+
+/// The bucket of a priority: 0 for the highest, quarter steps of `log2` (read off the float's
+/// exponent and two leading mantissa bits: monotone, no `log2` call).
+pub(crate) fn priority_bucket(p: f32) -> u8 {
+    // 2^-4 and below share the last bucket, 2^4 and above the first.
+    let lowest = 2f32.powi(-4).to_bits() >> 21;
+    let step = (p.max(0.0).to_bits() >> 21).saturating_sub(lowest);
+    (BUCKETS as u32 - 1).saturating_sub(step) as u8
+}
+
+/// What a run of jobs counted while planning.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PlanCounts {
+    /// Optional jobs (tested if the budget allows) per priority bucket.
+    pub optional: [u32; BUCKETS],
+    /// Jobs that need a test (optional and exact).
+    pub testable: u32,
+    /// Jobs handed over to the Tracking stage.
+    pub tracked: u32,
+    /// ADB jobs.
+    pub adb: u32,
+}
+
+impl PlanCounts {
+    pub fn add(mut self, other: &Self) -> Self {
+        for (a, b) in self.optional.iter_mut().zip(&other.optional) {
+            *a += b;
+        }
+        self.testable += other.testable;
+        self.tracked += other.tracked;
+        self.adb += other.adb;
+        self
+    }
+
+    pub fn count(jobs: &[Job]) -> Self {
+        let mut counts = Self::default();
+        for j in jobs {
+            if j.optional() {
+                counts.optional[usize::from(j.bucket)] += 1;
+            }
+            counts.testable += u32::from(j.testable());
+            counts.tracked += u32::from(j.tracked());
+            counts.adb += u32::from(j.method == Method::Adb && j.testable());
+        }
+        counts
+    }
+}
+
+/// What [`choose_tests`] chose: how many, and the ADB ones' count and summed priority (for
+/// their node-pair slices).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct Chosen {
+    pub count: usize,
+    pub adb: u64,
+    pub adb_priority: f64,
+}
+
+/// How many pairs can be tested in what is left of the time budget, by the measured costs,
+/// and the deadline of the tests. `testable` of the `all` pairs need a test; the others (and
+/// the tested ones past the deadline) are answered from memory, which takes time too.
+pub(crate) fn tests_that_fit(
+    budget: Duration,
+    testable: usize,
+    all: usize,
+    diag: &CollisionDiagnostics,
+    costs: &PairCosts,
+    now: Instant,
+) -> (usize, Instant) {
+    let spent = now.saturating_duration_since(diag.frame_start);
+    let reserve = diag.reserve_after_narrow();
+    let left_us = budget
+        .saturating_sub(spent)
+        .saturating_sub(reserve)
+        .as_secs_f64()
+        * 1e6;
+    // At least a sixteenth of the budget goes to tests, whatever the overhead: without tests
+    // nothing ever settles (and pairs that stopped moving cannot be cached).
+    let tests_us = (left_us - all as f64 * costs.memory_us).max(budget.as_secs_f64() * 0.0625e6);
+    let count = ((tests_us / costs.test_us.max(1e-3)) as usize).min(testable);
+    (count, now + Duration::from_secs_f64(tests_us * 1e-6))
+}
+
+/// Marks the jobs tested in this run: every testable exact job, and the optional ones above
+/// the `cut` (all of them without a cut; within the cut's bucket the first in pair order).
+pub(crate) fn choose_tests(jobs: &mut [Job], cut: Option<(u8, usize)>) -> Chosen {
+    let mut chosen = Chosen::default();
+    let mut taken_at_cut = 0;
+    for j in jobs.iter_mut() {
+        j.chosen = j.testable()
+            && (j.method == Method::Exact
+                || match cut {
+                    None => true,
+                    Some((bucket, _)) if j.bucket < bucket => true,
+                    Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
+                        taken_at_cut += 1;
+                        true
+                    }
+                    Some(_) => false,
+                });
+        if j.chosen {
+            chosen.count += 1;
+            if j.method == Method::Adb {
+                chosen.adb += 1;
+                chosen.adb_priority += f64::from(j.priority);
+            }
+        }
+    }
+    chosen
+}
+
+/// The priority bucket at which `count` of the jobs counted `per_bucket` are reached (from
+/// the most urgent), and how many of that bucket fit.
+pub(crate) fn priority_cut(per_bucket: &[u32; BUCKETS], count: usize) -> (u8, usize) {
+    let mut before = 0;
+    for (b, &n) in per_bucket.iter().enumerate() {
+        let n = n as usize;
+        if before + n >= count {
+            return (b as u8, count - before);
+        }
+        before += n;
+    }
+    (BUCKETS as u8, 0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn job(method: Method, priority: f32, cached: bool) -> Job {
+        Job {
+            method,
+            bucket: priority_bucket(priority),
+            cached,
+            priority,
+            ..Job::new(0, 0, 1)
+        }
+    }
+
+    fn chosen(jobs: &[Job]) -> Vec<usize> {
+        (0..jobs.len()).filter(|&i| jobs[i].chosen).collect()
+    }
+
+    #[test]
+    fn buckets_follow_the_priority_in_quarter_octaves() {
+        let b = |p: f32| priority_bucket(p);
+        assert_eq!(b(16.0), 0);
+        assert_eq!(b(1000.0), 0);
+        assert_eq!(b(1.0), 15);
+        assert_eq!(b(0.0625), 31);
+        assert_eq!(b(0.0), 31);
+        assert_eq!(b(1.0) - b(2.0), 4);
+        let mut last = 0;
+        for k in 0..400 {
+            let bucket = b(20.0 * 0.98f32.powi(k));
+            assert!(bucket >= last, "monotone");
+            last = bucket;
+        }
+    }
+
+    #[test]
+    fn exact_jobs_are_always_chosen_then_the_most_urgent_that_fit() {
+        let mut jobs = [
+            job(Method::Adb, 0.5, false),
+            job(Method::Exact, 0.1, false),
+            job(Method::Adb, 8.0, false),
+            job(Method::Adb, 9.0, true),
+            job(Method::Bounds, 9.0, false),
+            job(Method::Adb, 2.0, false),
+            job(Method::Exact, 0.1, true),
+            job(Method::Adb, 2.0, false),
+        ];
+        let plan = PlanCounts::count(&jobs);
+        assert_eq!(plan.testable, 5);
+        assert_eq!(plan.optional.iter().sum::<u32>(), 4);
+        assert_eq!(plan.adb, 4, "ADB jobs that need a test");
+        // Two optional tests fit: the 8.0 job and the first 2.0 job (pair order in a bucket).
+        let cut = priority_cut(&plan.optional, 2);
+        let c = choose_tests(&mut jobs, Some(cut));
+        assert_eq!(chosen(&jobs), vec![1, 2, 5]);
+        assert_eq!((c.count, c.adb, c.adb_priority), (3, 2, 10.0));
+        // No cut (work budgets): every testable job.
+        assert_eq!(choose_tests(&mut jobs, None).count, 5);
+        assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
+        // Nothing fits: the exact job still.
+        let cut = priority_cut(&plan.optional, 0);
+        choose_tests(&mut jobs, Some(cut));
+        assert_eq!(chosen(&jobs), vec![1]);
+        // More than there are: all of them.
+        let cut = priority_cut(&plan.optional, 100);
+        choose_tests(&mut jobs, Some(cut));
+        assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
+    }
+
+    #[test]
+    fn the_tests_that_fit_follow_the_measured_costs() {
+        let diag = CollisionDiagnostics::default();
+        let costs = PairCosts {
+            test_us: 2.0,
+            memory_us: 0.1,
+        };
+        let now = diag.frame_start;
+        // 2000 µs, 5000 pairs answered at 0.1 µs: 1500 µs for tests of 2 µs.
+        let budget = Duration::from_micros(2000);
+        let (count, deadline) = tests_that_fit(budget, 10_000, 5000, &diag, &costs, now);
+        assert_eq!(count, 750);
+        assert_eq!(deadline - now, Duration::from_micros(1500));
+        // Never more than the testable ones.
+        assert_eq!(tests_that_fit(budget, 10, 5000, &diag, &costs, now).0, 10);
+        // Overhead beyond the budget: a sixteenth of it still goes to tests.
+        let (count, _) = tests_that_fit(budget, 10_000, 50_000, &diag, &costs, now);
+        assert_eq!(count, 62);
+    }
+}

@@ -1,0 +1,349 @@
+//! The persistent pair table: one stable slot per candidate pair of colliders, kept from run
+//! to run. Created and removed by the broad phase, answered by the narrow phase and the
+//! Tracking stage, read by the Report stage (its transitions only) and by users through
+//! [`Collisions`](super::Collisions).
+use bevy_ecs::prelude::*;
+use glam::Vec3;
+
+use super::super::contact::ContactPoint;
+use super::super::narrow_phase::{Method, PairMemory, PairOutcome};
+
+/// What a pair's last answer was in full: read when it is reported, written when it is
+/// computed (every run reads [`PairHot`] instead).
+#[derive(Debug, Clone)]
+pub(crate) struct PairSlot {
+    /// The smaller entity.
+    pub a: Entity,
+    /// The larger entity (`a` itself for a self-collision).
+    pub b: Entity,
+    /// The last answer computed (by a test, or from memory for an exact pair under overload).
+    pub outcome: PairOutcome,
+    /// The last test's contact and the colliders' offset then (the second's translation
+    /// less the first's), for answers from memory.
+    pub contact: Option<ContactPoint>,
+    pub offset: Vec3,
+    /// The run from which the touching state holds.
+    pub since: u64,
+}
+
+/// What every run reads of a pair, in a compact array of its own, so that going over the
+/// pairs of the colliders that moved touches little memory. Run stamps are the run's number
+/// modulo 2³² (compared for equality, or subtracted for ages below 2³² runs).
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PairEnds {
+    /// The colliders' slots (the first is the smaller entity's).
+    pub body_a: u32,
+    pub body_b: u32,
+    /// Where the pair is in each collider's list of pairs.
+    pub pos_a: u32,
+    pub pos_b: u32,
+    /// The last run in which the pair was put on the active list (each pair once per run).
+    pub active_run: u32,
+    /// The last run in which its answer was computed or confirmed (world boxes apart).
+    pub checked_run: u32,
+    /// The last run in which the pair was put on the pending list.
+    pub pending_run: u32,
+    pub live: bool,
+    /// In the waiting queue.
+    pub waiting: bool,
+    /// Answered, not colliding, of two colliders: while their world boxes stay apart,
+    /// nothing about it needs work.
+    pub quiet: bool,
+}
+
+/// What planning reads of a pair.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PairHot {
+    /// Whether the pair touched as of the last Report.
+    pub touching: bool,
+    /// What the last test found (`None`: never tested).
+    pub memory: Option<PairMemory>,
+}
+
+/// A run's number as a stamp (see [`PairEnds`]).
+#[inline]
+pub(crate) fn stamp(run: u64) -> u32 {
+    run as u32
+}
+
+/// A pair whose touching state flipped in this run (or that was removed while touching).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) struct Transition {
+    pub a: Entity,
+    pub b: Entity,
+    pub started: bool,
+}
+
+/// What a test (or an answer computed from memory) leaves for later runs.
+#[derive(Debug, Clone)]
+pub(crate) struct Record {
+    pub memory: PairMemory,
+    pub contact: Option<ContactPoint>,
+    pub offset: Vec3,
+}
+
+/// Every candidate pair of colliders, one stable slot each (see the module documentation).
+///
+/// A pair exists while the two colliders' broad-phase boxes overlap and their layers
+/// interact, or, for a self-colliding deformable mesh, while it has the marker. Each run
+/// works only on its *active* pairs (new, moved, unsettled, or waiting for a test); the
+/// others keep their last answer, which still holds because nothing about them changed.
+#[derive(Resource, Debug, Default)]
+pub struct PairTable {
+    pub(crate) slots: Vec<PairSlot>,
+    /// Per slot, what every run reads, and what planning reads.
+    pub(crate) ends: Vec<PairEnds>,
+    pub(crate) hot: Vec<PairHot>,
+    free: Vec<u32>,
+    live: usize,
+    /// Pairs that need work in the next run: new, tracked, exact pairs a deadline left
+    /// untested.
+    pub(crate) pending: Vec<u32>,
+    /// Pairs waiting for a test (their last answer was kept, or cut by its budget), first
+    /// come first served: each run takes as many as it may test.
+    pub(crate) waiting: std::collections::VecDeque<u32>,
+    /// The pairs worked on in this run (built by the narrow phase).
+    pub(crate) active: Vec<u32>,
+    /// Pairs handed to the Tracking stage in this run.
+    pub(crate) tracked: Vec<u32>,
+    /// Pairs answered in this run that collide (their contacts are this run's contacts).
+    pub(crate) colliding: Vec<u32>,
+    /// Touching states that flipped in this run, in the order found (the Report sorts them).
+    pub(crate) transitions: Vec<Transition>,
+}
+
+impl PairTable {
+    /// Number of pairs.
+    pub fn len(&self) -> usize {
+        self.live
+    }
+
+    /// Whether there is no pair.
+    pub fn is_empty(&self) -> bool {
+        self.live == 0
+    }
+
+    /// The pairs worked on in the last run (answered by a test or from memory).
+    pub fn active_pairs(&self) -> usize {
+        self.active.len() + self.tracked.len()
+    }
+
+    /// Touching states that flipped in the last run.
+    pub fn transitions(&self) -> usize {
+        self.transitions.len()
+    }
+
+    /// The last answer computed for every pair, in slot order (stable from run to run); its
+    /// [`run`](PairOutcome::run) says when.
+    pub fn outcomes(&self) -> impl Iterator<Item = &PairOutcome> {
+        self.slots
+            .iter()
+            .zip(&self.ends)
+            .filter(|(_, e)| e.live)
+            .map(|(s, _)| &s.outcome)
+    }
+
+    /// Pair `i`'s colliders and stamps.
+    #[inline]
+    pub(crate) fn ends(&self, i: u32) -> &PairEnds {
+        &self.ends[i as usize]
+    }
+
+    /// What planning reads of pair `i`.
+    #[inline]
+    pub(crate) fn hot(&self, i: u32) -> &PairHot {
+        &self.hot[i as usize]
+    }
+
+    /// The slot of pair `i`.
+    #[inline]
+    pub(crate) fn slot(&self, i: u32) -> &PairSlot {
+        &self.slots[i as usize]
+    }
+
+    /// Creates the pair of colliders `(a, body_a)` and `(b, body_b)` (the same for a
+    /// self-collision) and puts it on the pending list; returns its slot. The caller links it
+    /// to both colliders.
+    pub(crate) fn create(
+        &mut self,
+        (a, body_a): (Entity, u32),
+        (b, body_b): (Entity, u32),
+        run: u64,
+    ) -> u32 {
+        let ((a, body_a), (b, body_b)) = if a <= b {
+            ((a, body_a), (b, body_b))
+        } else {
+            ((b, body_b), (a, body_a))
+        };
+        let slot = PairSlot {
+            a,
+            b,
+            outcome: PairOutcome::untested((a, b), run),
+            contact: None,
+            offset: Vec3::ZERO,
+            since: run,
+        };
+        let ends = PairEnds {
+            body_a,
+            body_b,
+            pos_a: 0,
+            pos_b: 0,
+            active_run: stamp(run).wrapping_sub(1),
+            checked_run: stamp(run),
+            pending_run: stamp(run).wrapping_sub(1),
+            live: true,
+            waiting: false,
+            quiet: false,
+        };
+        let hot = PairHot {
+            touching: false,
+            memory: None,
+        };
+        let i = match self.free.pop() {
+            Some(i) => {
+                self.slots[i as usize] = slot;
+                self.ends[i as usize] = ends;
+                self.hot[i as usize] = hot;
+                i
+            }
+            None => {
+                self.slots.push(slot);
+                self.ends.push(ends);
+                self.hot.push(hot);
+                (self.slots.len() - 1) as u32
+            }
+        };
+        self.live += 1;
+        self.mark_pending(i, run);
+        i
+    }
+
+    /// Removes pair `i` (a touching pair's contact ends: a transition). The caller unlinks it
+    /// from its colliders.
+    pub(crate) fn remove(&mut self, i: u32) {
+        if !self.ends[i as usize].live {
+            return;
+        }
+        self.ends[i as usize] = PairEnds::default();
+        let h = &mut self.hot[i as usize];
+        let touching = h.touching;
+        *h = PairHot::default();
+        if touching {
+            let s = &self.slots[i as usize];
+            self.transitions.push(Transition {
+                a: s.a,
+                b: s.b,
+                started: false,
+            });
+        }
+        self.live -= 1;
+        self.free.push(i);
+    }
+
+    /// Puts pair `i` on the pending list (once per run): it is worked on in the next run.
+    #[inline]
+    pub(crate) fn mark_pending(&mut self, i: u32, run: u64) {
+        let e = &mut self.ends[i as usize];
+        if e.pending_run != stamp(run) {
+            e.pending_run = stamp(run);
+            self.pending.push(i);
+        }
+    }
+
+    /// Puts pair `i` in the waiting queue (once).
+    #[inline]
+    pub(crate) fn wait(&mut self, i: u32) {
+        let e = &mut self.ends[i as usize];
+        if e.live && !e.waiting {
+            e.waiting = true;
+            self.waiting.push_back(i);
+        }
+    }
+
+    /// The number of pairs waiting for a test.
+    pub fn waiting(&self) -> usize {
+        self.waiting.len()
+    }
+
+    /// Puts pair `i` on this run's active list (once per run).
+    #[inline]
+    pub(crate) fn activate(&mut self, i: u32, run: u64) {
+        let e = &mut self.ends[i as usize];
+        if e.active_run != stamp(run) && e.live {
+            e.active_run = stamp(run);
+            self.active.push(i);
+        }
+    }
+
+    /// Records pair `i`'s answer computed in this run: its touching state (a transition when
+    /// it flips), its contacts for this run's Report, and `record` as its memory when given.
+    pub(crate) fn answer(
+        &mut self,
+        i: u32,
+        outcome: PairOutcome,
+        record: Option<Record>,
+        run: u64,
+    ) {
+        let (h, s) = (&mut self.hot[i as usize], &mut self.slots[i as usize]);
+        if let Some(r) = record {
+            h.memory = Some(r.memory);
+            s.contact = r.contact;
+            s.offset = r.offset;
+        }
+        let (pending, waits) = match outcome.method {
+            Method::Tracking | Method::SelfCollision | Method::Coherence => (true, false),
+            _ => (false, outcome.budget_exhausted),
+        };
+        self.ends[i as usize].checked_run = stamp(outcome.computed_run);
+        s.outcome = outcome;
+        self.flip_if(i, self.slots[i as usize].outcome.collides, run);
+        if pending {
+            self.mark_pending(i, run);
+        }
+        if waits {
+            self.wait(i);
+        }
+    }
+
+    /// Pair `i` worked on in this run but not tested: its last answer stands, one run older
+    /// (`cached`: it still holds, nothing moved); unless cached, it waits for a test.
+    pub(crate) fn keep(&mut self, i: u32, cached: bool, run: u64) {
+        let h = &mut self.hot[i as usize];
+        let collides = h.memory.is_some_and(|m| m.collides);
+        if !cached && let Some(m) = &mut h.memory {
+            m.stale = m.stale.saturating_add(1);
+        }
+        self.flip_if(i, collides, run);
+        if !cached {
+            self.wait(i);
+        }
+    }
+
+    /// Sets pair `i`'s touching state to `collides` (a transition when it flips) and lists it
+    /// among this run's colliding pairs when it collides.
+    fn flip_if(&mut self, i: u32, collides: bool, run: u64) {
+        let h = &mut self.hot[i as usize];
+        let e = &mut self.ends[i as usize];
+        e.quiet = h.memory.is_some() && !collides && e.body_a != e.body_b;
+        if collides != h.touching {
+            h.touching = collides;
+            let s = &mut self.slots[i as usize];
+            s.since = run;
+            self.transitions.push(Transition {
+                a: s.a,
+                b: s.b,
+                started: collides,
+            });
+        }
+        if collides {
+            self.colliding.push(i);
+        }
+    }
+
+    /// Starts a run: clears the last run's lists of answers.
+    pub(crate) fn begin_run(&mut self) {
+        self.tracked.clear();
+        self.colliding.clear();
+        self.transitions.clear();
+    }
+}

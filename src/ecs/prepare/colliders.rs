@@ -1,0 +1,298 @@
+//! The collider table: one stable slot per valid collider, kept from run to run and updated
+//! from the ECS's change detection, so a collider that does not change costs nothing.
+use std::sync::Arc;
+
+use bevy_ecs::entity::EntityHashMap;
+use bevy_ecs::prelude::*;
+use glam::{Vec3, Vec3A};
+use smallvec::SmallVec;
+
+use super::super::components::{CollisionLayers, Fidelity};
+use crate::adb::AdbTree;
+use crate::bvh::CollisionMesh;
+use crate::geometry::{Aabb, Pose};
+
+/// The geometry of a collider: a shared rigid tree or a deformable mesh.
+#[derive(Debug, Clone)]
+pub enum Geometry {
+    /// A rigid collider's shared ADB-tree (and BVH).
+    Rigid(Arc<AdbTree>),
+    /// A deformable mesh as last refitted.
+    Deformable(Arc<CollisionMesh>),
+}
+
+impl Geometry {
+    /// The mesh and its BVH.
+    #[inline]
+    pub fn mesh(&self) -> &CollisionMesh {
+        match self {
+            Geometry::Rigid(t) => t.collision_mesh(),
+            Geometry::Deformable(m) => m,
+        }
+    }
+
+    /// The ADB-tree (rigid colliders only).
+    #[inline]
+    pub fn adb(&self) -> Option<&AdbTree> {
+        match self {
+            Geometry::Rigid(t) => Some(t),
+            Geometry::Deformable(_) => None,
+        }
+    }
+
+    /// The geometry's identity: the address of its shared data (a swapped collider is a
+    /// change).
+    pub(crate) fn id(&self) -> usize {
+        match self {
+            Geometry::Rigid(t) => Arc::as_ptr(t) as usize,
+            Geometry::Deformable(m) => Arc::as_ptr(m) as usize,
+        }
+    }
+}
+
+/// One valid collider as the pipeline sees it.
+#[derive(Debug, Clone)]
+pub struct ColliderEntry {
+    /// The entity.
+    pub entity: Entity,
+    /// Its geometry.
+    pub geometry: Geometry,
+    /// Its pose.
+    pub pose: Pose,
+    /// Its world box (inflated by [`CollisionConfig::aabb_margin`](super::super::CollisionConfig::aabb_margin)).
+    pub aabb: Aabb,
+    /// Its fidelity.
+    pub fidelity: Fidelity,
+    /// Its layers.
+    pub layers: CollisionLayers,
+    /// Whether it has the [`SelfCollision`](super::super::SelfCollision) marker and is
+    /// deformable.
+    pub self_collision: bool,
+    /// Translation in the last run it moved in, if that was this run (an estimate of
+    /// speed × time step); zero otherwise.
+    pub motion: Vec3,
+    /// The run ([`CollisionDiagnostics::frame`](super::super::CollisionDiagnostics::frame))
+    /// since which the entity's pose and geometry are unchanged: an answer computed in that
+    /// run or later still holds for a rigid pair.
+    pub still_since: u64,
+    /// Its pairs' slots in the [`PairTable`](super::super::PairTable).
+    pub(crate) pairs: SmallVec<[u32; 12]>,
+    /// The last run in which it changed (listed in [`ColliderTable::changed`] once per run).
+    pub(crate) changed_run: u64,
+    /// The last run in which its layers or self-collision marker changed.
+    pub(crate) filter_run: u64,
+}
+
+impl ColliderEntry {
+    /// Whether the collider is rigid (its answers can be kept while it does not move).
+    #[inline]
+    pub fn is_rigid(&self) -> bool {
+        matches!(self.geometry, Geometry::Rigid(_))
+    }
+
+    /// Its pairs' slots in the pair table.
+    pub(crate) fn pair_slots(&self) -> &[u32] {
+        &self.pairs
+    }
+}
+
+/// A collider's world box in SIMD lanes and the last run it changed in (as a stamp: the run's
+/// number modulo 2³²): what every run reads of it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BoxStamp {
+    min: Vec3A,
+    max: Vec3A,
+    pub stamp: u32,
+}
+
+impl BoxStamp {
+    fn new(aabb: &Aabb, stamp: u32) -> Self {
+        Self {
+            min: aabb.min.into(),
+            max: aabb.max.into(),
+            stamp,
+        }
+    }
+
+    /// Whether the two boxes overlap (touching counts), as [`Aabb::intersects`].
+    #[inline]
+    pub fn intersects(&self, o: &BoxStamp) -> bool {
+        (self.min.cmple(o.max) & o.min.cmple(self.max)).all()
+    }
+}
+
+/// What planning a pair reads of a collider.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct BodyPlan {
+    pub aabb: Aabb,
+    pub motion: Vec3,
+    pub fidelity: Fidelity,
+    pub still_since: u64,
+    pub rigid: bool,
+}
+
+impl BodyPlan {
+    fn of(e: &ColliderEntry) -> Self {
+        Self {
+            aabb: e.aabb,
+            motion: e.motion,
+            fidelity: e.fidelity,
+            still_since: e.still_since,
+            rigid: e.is_rigid(),
+        }
+    }
+}
+
+/// Every valid collider, one stable slot each, kept from run to run (read-only for users:
+/// what the stages see).
+///
+/// The Prepare stage updates only the entities whose pose, collider, fidelity, layers or
+/// markers changed (Bevy's change detection), and those removed or despawned; a collider at
+/// rest costs nothing per run.
+#[derive(Resource, Debug, Default)]
+pub struct ColliderTable {
+    slots: Vec<Option<ColliderEntry>>,
+    /// Per slot, what every run reads of the collider, and what planning a pair reads.
+    boxes: Vec<BoxStamp>,
+    plans: Vec<BodyPlan>,
+    free: Vec<u32>,
+    index: EntityHashMap<u32>,
+    /// Slots whose collider changed in this run (each once).
+    changed: Vec<u32>,
+    /// Colliders removed in this run, with their slots: the broad phase drops their proxies
+    /// and pairs, then frees the slots.
+    pub(crate) removed: Vec<(u32, ColliderEntry)>,
+    /// Slots whose collider moved in the last run (their motion is reset when they rest).
+    moved: Vec<u32>,
+}
+
+impl ColliderTable {
+    /// The entry of `entity`, if it is a valid collider.
+    pub fn get(&self, entity: Entity) -> Option<&ColliderEntry> {
+        self.index.get(&entity).map(|&i| self.entry(i))
+    }
+
+    /// Every valid collider, in slot order (stable from run to run).
+    pub fn iter(&self) -> impl Iterator<Item = &ColliderEntry> {
+        self.slots.iter().flatten()
+    }
+
+    /// Number of valid colliders.
+    pub fn len(&self) -> usize {
+        self.index.len()
+    }
+
+    /// Whether there is no valid collider.
+    pub fn is_empty(&self) -> bool {
+        self.index.is_empty()
+    }
+
+    /// The slot of `entity`.
+    pub(crate) fn slot_of(&self, entity: Entity) -> Option<u32> {
+        self.index.get(&entity).copied()
+    }
+
+    /// The collider in slot `i`, which must be live (pairs only refer to live colliders).
+    #[inline]
+    pub(crate) fn entry(&self, i: u32) -> &ColliderEntry {
+        self.slots[i as usize]
+            .as_ref()
+            .expect("pairs and lists refer to live collider slots only")
+    }
+
+    /// Whether slot `i` holds a collider.
+    #[inline]
+    pub(crate) fn is_live(&self, i: u32) -> bool {
+        self.slots.get(i as usize).is_some_and(Option::is_some)
+    }
+
+    /// The collider in slot `i`, to write.
+    #[inline]
+    pub(crate) fn entry_mut(&mut self, i: u32) -> &mut ColliderEntry {
+        self.slots[i as usize]
+            .as_mut()
+            .expect("pairs and lists refer to live collider slots only")
+    }
+
+    /// Slots whose collider changed in this run.
+    pub(crate) fn changed(&self) -> &[u32] {
+        &self.changed
+    }
+
+    /// Starts a run: forgets the last run's changes; the colliders that moved in the last
+    /// run and not (yet) in this one get zero motion.
+    pub(crate) fn begin_run(&mut self) {
+        self.changed.clear();
+        for i in std::mem::take(&mut self.moved) {
+            if let Some(e) = self.slots[i as usize].as_mut() {
+                e.motion = Vec3::ZERO;
+                self.plans[i as usize].motion = Vec3::ZERO;
+            }
+        }
+    }
+
+    /// What planning reads, by slot.
+    #[inline]
+    pub(crate) fn plans(&self) -> &[BodyPlan] {
+        &self.plans
+    }
+
+    /// The world boxes and change stamps, by slot.
+    #[inline]
+    pub(crate) fn boxes(&self) -> &[BoxStamp] {
+        &self.boxes
+    }
+
+    /// Marks slot `i` as changed in `run` (listed once); `moved`: its pose or geometry changed.
+    /// Its world box is read again.
+    pub(crate) fn mark_changed(&mut self, i: u32, run: u64, moved: bool) {
+        self.boxes[i as usize] = BoxStamp::new(&self.entry(i).aabb, run as u32);
+        self.plans[i as usize] = BodyPlan::of(self.entry(i));
+        let e = self.entry_mut(i);
+        let first = e.changed_run != run;
+        e.changed_run = run;
+        if first {
+            self.changed.push(i);
+        }
+        if moved {
+            self.moved.push(i);
+        }
+    }
+
+    /// Adds a new collider; returns its slot.
+    pub(crate) fn insert(&mut self, entry: ColliderEntry) -> u32 {
+        let entity = entry.entity;
+        let (aabb, plan) = (entry.aabb, BodyPlan::of(&entry));
+        let i = match self.free.pop() {
+            Some(i) => {
+                self.slots[i as usize] = Some(entry);
+                self.boxes[i as usize] = BoxStamp::new(&aabb, u32::MAX);
+                self.plans[i as usize] = plan;
+                i
+            }
+            None => {
+                self.slots.push(Some(entry));
+                self.boxes.push(BoxStamp::new(&aabb, u32::MAX));
+                self.plans.push(plan);
+                (self.slots.len() - 1) as u32
+            }
+        };
+        self.index.insert(entity, i);
+        i
+    }
+
+    /// Removes `entity`'s collider, if any: it leaves the table now, its slot after the broad
+    /// phase has dropped its proxy and pairs.
+    pub(crate) fn remove(&mut self, entity: Entity) {
+        if let Some(i) = self.index.remove(&entity)
+            && let Some(entry) = self.slots[i as usize].take()
+        {
+            self.removed.push((i, entry));
+        }
+    }
+
+    /// Frees the slot of a removed collider (its proxy and pairs are gone).
+    pub(crate) fn free_slot(&mut self, i: u32) {
+        self.free.push(i);
+    }
+}

@@ -1,0 +1,305 @@
+//! Prepare stage: poses, refit of deformed meshes, validation, world boxes, kept in the
+//! [`ColliderTable`] from run to run and updated only where the ECS says something changed.
+mod colliders;
+mod world_box;
+
+use std::sync::{Arc, LazyLock};
+use std::time::Instant;
+
+use bevy_ecs::entity::EntityHashSet;
+use bevy_ecs::prelude::*;
+use bevy_ecs::query::QueryItem;
+use bevy_ecs::system::SystemParam;
+use glam::Vec3;
+
+pub use colliders::{ColliderEntry, ColliderTable, Geometry};
+use world_box::tight_world_aabb;
+pub(crate) use world_box::world_aabb;
+
+use super::components::{
+    Collider, ColliderPose, CollisionLayers, Deformable, Fidelity, SelfCollision,
+};
+use super::config::CollisionConfig;
+use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
+use super::events::{CollisionError, CollisionErrorKind};
+use super::pool::CollisionTaskPool;
+use crate::bvh::CollisionMesh;
+use crate::geometry::Pose;
+use crate::mesh::{MeshError, TriMesh};
+
+/// What Prepare remembers between runs: the entities reported invalid (reported once).
+#[derive(Resource, Debug, Default)]
+pub struct PrepareState {
+    invalid: EntityHashSet,
+}
+
+/// Run condition: some deformable mesh has new positions.
+pub fn any_stale(q: Query<&Deformable>) -> bool {
+    q.iter().any(|d| d.stale)
+}
+
+/// Copies `GlobalTransform` into [`ColliderPose`] (rotation and translation) where it changed.
+#[cfg(feature = "transform")]
+pub fn sync_global_transforms(
+    mut q: Query<
+        (
+            &bevy_transform::components::GlobalTransform,
+            &mut ColliderPose,
+        ),
+        Changed<bevy_transform::components::GlobalTransform>,
+    >,
+) {
+    for (gt, mut pose) in &mut q {
+        let (_, rotation, translation) = gt.to_scale_rotation_translation();
+        pose.set_if_neq(ColliderPose(Pose::new(translation, rotation)));
+    }
+}
+
+/// A mesh the table holds for a deformable collider while its own is refitted in place.
+static REFITTING: LazyLock<Arc<CollisionMesh>> = LazyLock::new(|| {
+    let triangle = TriMesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]])
+        .expect("a valid triangle");
+    Arc::new(CollisionMesh::new(triangle))
+});
+
+/// Refits the BVHs of deformable meshes whose positions changed, in parallel.
+pub fn refit_deformables(
+    mut q: Query<(Entity, &mut Deformable)>,
+    mut table: ResMut<ColliderTable>,
+    pool: Res<CollisionTaskPool>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    // The first system of a run when it runs (a deformable mesh has new positions).
+    begin_frame(&mut diag);
+    diag.begun_by_refit = true;
+    let start = Instant::now();
+    let mut stale: Vec<(Entity, Mut<Deformable>, Option<MeshError>)> = q
+        .iter_mut()
+        .filter(|(_, d)| d.stale)
+        .map(|(e, d)| (e, d, None))
+        .collect();
+    // The table's share of each mesh is let go first, so the refit happens in place (the
+    // update after this puts the refitted mesh back).
+    for (entity, _, _) in &stale {
+        if let Some(i) = table.slot_of(*entity) {
+            table.entry_mut(i).geometry = Geometry::Deformable(REFITTING.clone());
+        }
+    }
+    let chunk = pool.chunk_size(stale.len(), 1);
+    pool.for_each_mut(&mut stale, chunk, |(_, d, err)| {
+        let d = &mut **d;
+        d.stale = false;
+        *err = Arc::make_mut(&mut d.mesh).set_positions(&d.positions).err();
+    });
+    for (_, d, err) in &mut stale {
+        d.broken = err.take();
+    }
+    diag.record(Stage::Refit, start.elapsed(), stale.len() as u64);
+}
+
+/// What a collider's components say.
+type ColliderData<'a> = (
+    Entity,
+    &'a ColliderPose,
+    Option<&'a Collider>,
+    Option<&'a Deformable>,
+    Option<&'a Fidelity>,
+    Option<&'a CollisionLayers>,
+    Has<SelfCollision>,
+);
+
+/// One entity's [`ColliderData`].
+type ColliderItem<'a> = QueryItem<'a, 'a, ColliderData<'static>>;
+
+type IsCollider = Or<(With<Collider>, With<Deformable>)>;
+
+type AnyChange = Or<(
+    Changed<ColliderPose>,
+    Changed<Collider>,
+    Changed<Deformable>,
+    Changed<Fidelity>,
+    Changed<CollisionLayers>,
+    Changed<SelfCollision>,
+)>;
+
+/// The colliders whose components changed since the last run, or were removed.
+#[derive(SystemParam)]
+pub struct ColliderChanges<'w, 's> {
+    all: Query<'w, 's, ColliderData<'static>, IsCollider>,
+    changed: Query<'w, 's, ColliderData<'static>, (IsCollider, AnyChange)>,
+    colliders: RemovedComponents<'w, 's, Collider>,
+    deformables: RemovedComponents<'w, 's, Deformable>,
+    fidelities: RemovedComponents<'w, 's, Fidelity>,
+    layers: RemovedComponents<'w, 's, CollisionLayers>,
+    markers: RemovedComponents<'w, 's, SelfCollision>,
+}
+
+/// Brings the [`ColliderTable`] up to date: validates and adds new colliders, updates those
+/// whose components changed, removes those gone (or invalid: reported once with a
+/// [`CollisionError`] and skipped until fixed). Everything after a change of configuration.
+pub fn update_colliders(
+    mut changes: ColliderChanges,
+    config: Res<CollisionConfig>,
+    mut table: ResMut<ColliderTable>,
+    mut state: ResMut<PrepareState>,
+    mut errors: MessageWriter<CollisionError>,
+    mut diag: ResMut<CollisionDiagnostics>,
+) {
+    if !std::mem::take(&mut diag.begun_by_refit) {
+        begin_frame(&mut diag);
+    }
+    let start = Instant::now();
+    let run = diag.frame;
+    table.begin_run();
+    let full = config.is_changed();
+    let mut update = Update {
+        table: &mut table,
+        invalid: &mut state.invalid,
+        errors: &mut errors,
+        config: &config,
+        run,
+        full,
+    };
+    let mut again: Vec<Entity> = changes
+        .colliders
+        .read()
+        .chain(changes.deformables.read())
+        .chain(changes.fidelities.read())
+        .chain(changes.layers.read())
+        .chain(changes.markers.read())
+        .collect();
+    if full {
+        for data in &changes.all {
+            update.entry(data);
+        }
+    } else {
+        for data in &changes.changed {
+            update.entry(data);
+        }
+    }
+    again.sort_unstable();
+    again.dedup();
+    for entity in again {
+        match changes.all.get(entity) {
+            Ok(data) => update.entry(data),
+            Err(_) => {
+                update.invalid.remove(&entity);
+                update.table.remove(entity);
+            }
+        }
+    }
+    let items = table.changed().len() as u64;
+    diag.record(Stage::Prepare, start.elapsed(), items);
+}
+
+/// One run's updates of the table.
+struct Update<'a, 'w> {
+    table: &'a mut ColliderTable,
+    invalid: &'a mut EntityHashSet,
+    errors: &'a mut MessageWriter<'w, CollisionError>,
+    config: &'a CollisionConfig,
+    run: u64,
+    /// Everything is updated (the configuration changed: margins, default fidelity).
+    full: bool,
+}
+
+impl Update<'_, '_> {
+    /// Updates the collider of one entity from its components.
+    fn entry(&mut self, data: ColliderItem) {
+        let (entity, pose, collider, deformable, fidelity, layers, self_marker) = data;
+        let (geometry, default_fidelity, problem) = match (deformable, collider) {
+            (Some(d), _) => (
+                Geometry::Deformable(d.mesh.clone()),
+                Fidelity::Exact,
+                d.broken.clone().map(CollisionErrorKind::Mesh),
+            ),
+            (None, Some(c)) => (
+                Geometry::Rigid(c.tree().clone()),
+                self.config.default_fidelity,
+                None,
+            ),
+            (None, None) => {
+                self.table.remove(entity);
+                return;
+            }
+        };
+        if let Some(kind) = problem.or_else(|| check_pose(&pose.0).err()) {
+            if self.invalid.insert(entity) {
+                self.errors.write(CollisionError { entity, kind });
+            }
+            self.table.remove(entity);
+            return;
+        }
+        self.invalid.remove(&entity);
+        let pose = normalized(&pose.0);
+        let fidelity = fidelity.copied().unwrap_or(default_fidelity);
+        let layers = layers.copied().unwrap_or_default();
+        let self_collision = self_marker && deformable.is_some();
+        let margin = self.config.aabb_margin;
+        let run = self.run;
+        let Some(i) = self.table.slot_of(entity) else {
+            let aabb = tight_world_aabb(geometry.mesh().bvh(), &pose).inflated(margin);
+            let i = self.table.insert(ColliderEntry {
+                entity,
+                geometry,
+                pose,
+                aabb,
+                fidelity,
+                layers,
+                self_collision,
+                motion: Vec3::ZERO,
+                still_since: run,
+                pairs: Default::default(),
+                changed_run: 0,
+                filter_run: run,
+            });
+            self.table.mark_changed(i, run, false);
+            return;
+        };
+        let e = self.table.entry_mut(i);
+        let same_geometry = e.geometry.id() == geometry.id();
+        // A deformable mesh updated here was refitted (or its marker changed): it moved.
+        let moved = e.pose != pose || !same_geometry || !e.is_rigid();
+        let filters = e.layers != layers || e.self_collision != self_collision;
+        if !(moved || filters || e.fidelity != fidelity || self.full) {
+            // Written with the same values.
+            return;
+        }
+        if moved {
+            e.motion = if same_geometry {
+                pose.translation - e.pose.translation
+            } else {
+                Vec3::ZERO
+            };
+            e.still_since = run;
+            e.pose = pose;
+            e.geometry = geometry;
+        }
+        if moved || self.full {
+            e.aabb = tight_world_aabb(e.geometry.mesh().bvh(), &e.pose).inflated(margin);
+        }
+        if filters {
+            e.filter_run = run;
+        }
+        e.fidelity = fidelity;
+        e.layers = layers;
+        e.self_collision = self_collision;
+        self.table.mark_changed(i, run, moved);
+    }
+}
+
+fn check_pose(pose: &Pose) -> Result<(), CollisionErrorKind> {
+    let finite = pose.translation.is_finite() && pose.rotation.is_finite();
+    let len = pose.rotation.length();
+    if !finite || !(0.5..=2.0).contains(&len) {
+        return Err(CollisionErrorKind::InvalidPose {
+            translation: pose.translation.to_array(),
+            rotation: pose.rotation.to_array(),
+        });
+    }
+    Ok(())
+}
+
+fn normalized(pose: &Pose) -> Pose {
+    Pose::new(pose.translation, pose.rotation.normalize())
+}
