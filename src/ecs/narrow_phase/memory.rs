@@ -27,6 +27,8 @@ pub(crate) struct PairMemory {
     /// How it was asked for: the pair's method and `p_min` then (another fidelity asks anew).
     pub method: Method,
     pub p_min: f64,
+    /// The world boxes were apart (no test ran): when they meet, the pair is as new.
+    pub boxes_apart: bool,
 }
 
 impl Record {
@@ -46,6 +48,7 @@ impl Record {
                 tested_run: run,
                 method: job.method,
                 p_min: job.p_min,
+                boxes_apart: job.apart,
             },
             contact: o.contacts.first().copied(),
             offset: eb.pose.translation - ea.pose.translation,

@@ -119,10 +119,11 @@ pub(crate) fn plan_jobs(
             // Exact pairs were asked for: tested before the others.
             priority *= 4.0;
         }
-        // New pairs first (collisions start there); a pair answered from memory waits less
-        // each run, so none starves under overload.
+        // New pairs first, and pairs whose boxes just met (collisions start there); a pair
+        // answered from memory waits less each run, so none starves under overload.
         match memory {
             None => priority *= 4.0,
+            Some(m) if m.boxes_apart => priority *= 4.0,
             Some(m) => priority *= (1 + m.stale.min(15)) as f32,
         }
         // Both stopped (unchanged since the last run) but the answer is not settled: one test

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Reproduces the plugin measurements the README quotes: every run's printed summary goes to
+# docs/plugin/runs/summary.txt and its JSON to docs/plugin/runs/<name>.json.
+# Usage: docs/plugin/measure.sh [path to a profile binary of another commit, run alongside]
+# (the README's comparison with the earlier pipeline used the binary of commit 18a6970).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+cargo build --release --example profile
+new=target/release/examples/profile
+old=${1:-}
+out=docs/plugin/runs
+mkdir -p "$out"
+: > "$out/summary.txt"
+run() { # name binary args...
+  local name=$1 bin=$2
+  shift 2
+  echo "== $name: profile $*" | tee -a "$out/summary.txt"
+  "$bin" "$@" --json "$out/$name.json" | tee -a "$out/summary.txt"
+}
+for seed in 2 3; do
+  for n in 1000 10000; do
+    frames=600
+    [ "$n" = 10000 ] && frames=300
+    run "pile-$n-seed$seed" "$new" --scene pile --entities "$n" --threads 2 --budget-us 2000 --frames "$frames" --seed "$seed"
+    if [ -n "$old" ]; then
+      run "pile-$n-seed$seed-before" "$old" --scene pile --entities "$n" --threads 2 --budget-us 2000 --frames "$frames" --seed "$seed"
+    fi
+  done
+done
+run pile-1000-1thread "$new" --scene pile --entities 1000 --threads 1 --budget-us 2000 --frames 600 --seed 2
+run pile-1000-unbudgeted "$new" --scene pile --entities 1000 --threads 2 --budget-us 0 --frames 600 --seed 2
+run pile-1000-10000frames "$new" --scene pile --entities 1000 --threads 2 --budget-us 2000 --frames 10000 --seed 2
+for t in 1 2; do
+  run "pile-work-$t-threads" "$new" --scene pile --entities 1000 --threads "$t" --node-budget 200000 --frames 300 --seed 2
+done
+for scene in cannonball cloth intestine; do
+  run "$scene" "$new" --scene "$scene" --threads 2
+done
+"$new" --scene pile --entities 1000 --threads 2 --budget-us 2000 --frames 600 --seed 1 \
+  --json docs/plugin/pile.json --svg docs/plugin/pile_timeline.svg | tee -a "$out/summary.txt"
