@@ -36,5 +36,25 @@ done
 for scene in cannonball cloth intestine; do
   run "$scene" "$new" --scene "$scene" --threads 2
 done
+for k in 2 3; do
+  run "cannonball-run$k" "$new" --scene cannonball --threads 2
+done
+if [ -n "$old" ]; then
+  for k in 1 2 3; do
+    run "cannonball-before-run$k" "$old" --scene cannonball --threads 2
+  done
+fi
+# The cannonball example under its work budget, three alternating runs of each build (the old
+# one: the cannonball example built from the same commit as the old profile, beside it).
+{
+  for k in 1 2 3; do
+    echo "== this commit: cargo run --release --example cannonball (run $k)"
+    cargo run --release --quiet --example cannonball
+    if [ -n "$old" ]; then
+      echo "== before: cannonball (run $k)"
+      "$(dirname "$old")/cannonball"
+    fi
+  done
+} > "$out/cannonball-example.txt" 2>&1
 "$new" --scene pile --entities 1000 --threads 2 --budget-us 2000 --frames 600 --seed 1 \
   --json docs/plugin/pile.json --svg docs/plugin/pile_timeline.svg | tee -a "$out/summary.txt"

@@ -109,8 +109,10 @@ pub(crate) fn plan_jobs(
         if job.cached && !memory.is_some_and(|m| m.collides) {
             continue;
         }
+        // A pair whose boxes just met is as uncertain as a new one (its memory says only that
+        // the boxes were apart).
         let mut priority = pair_priority(
-            memory.map(|m| m.probability),
+            memory.filter(|m| !m.boxes_apart).map(|m| m.probability),
             &ea.aabb,
             &eb.aabb,
             eb.motion - ea.motion,
