@@ -9,7 +9,7 @@
 //! second axis; a sweep runs only in runs where some fat box moved, and reports only pairs
 //! with a moved box that do not exist yet.
 //!
-//! Invariant (checked by `tests/plugin_broad_phase.rs` against brute force): the
+//! Invariant (checked by `tests/plugin_pair_table.rs` against brute force): the
 //! [`PairTable`] holds a pair for every two valid colliders whose world boxes overlap and
 //! whose layers interact, and only pairs whose fat boxes overlap and whose layers interact
 //! (plus one pair `(e, e)` per self-colliding deformable mesh).
@@ -277,9 +277,9 @@ fn sweep(
             });
         }
     }
-    let lane_ids: Vec<u32> = (0..lanes as u32).collect();
+    let lane_ids: [u32; 32] = std::array::from_fn(|l| l as u32);
     let (members, table, pair_table) = (&state.lanes, colliders, pairs);
-    pool.map_chunks_into(&lane_ids, 1, &mut state.found, |ls, found| {
+    pool.map_chunks_into(&lane_ids[..lanes], 1, &mut state.found, |ls, found| {
         for &l in ls {
             let boxes = &members[l as usize];
             for (k, bi) in boxes.iter().enumerate() {

@@ -81,7 +81,7 @@ pub struct CollisionConfig {
     pub aabb_margin: f32,
     /// How far a collider may move before the broad phase looks at it again, as a fraction
     /// of its world box's largest extent: its broad-phase (fat) box is its world box grown
-    /// by this much and stretched along twice its last motion. Larger: fewer broad-phase
+    /// by this much and stretched along six times its last motion. Larger: fewer broad-phase
     /// updates, more pairs to check for overlapping world boxes (a few nanoseconds each).
     pub proxy_margin: f32,
     /// Write a [`Contact`](super::Contact) message per contact point of every pair answered

@@ -86,8 +86,8 @@ pub struct CollisionCounters {
     /// Wall-clock time of the narrow phase's parallel tests, summed over runs: with
     /// `tested_pairs` and `node_pairs`, the narrow phase's throughput.
     pub test_time: Duration,
-    /// Active pairs not tested because neither entity moved since their settled answer (see
-    /// [`Method::Cached`](super::Method::Cached)); pairs not active at all are not counted.
+    /// Active pairs not tested because neither entity moved since their settled answer, which
+    /// stands as it is (pairs not active at all are not counted).
     pub cached_pairs: u64,
     /// Pairs tested exactly.
     pub exact_pairs: u64,

@@ -57,7 +57,7 @@ pub struct Velocity(pub Vec3);
 
 /// Sleep state of a body with [`Velocity`]: a body slower than
 /// [`ImpulseSettings::sleep_speed`] for [`ImpulseSettings::sleep_frames`] runs falls asleep:
-/// it stops moving (so its pairs are [cached](super::Method::Cached)) until an awake body
+/// it stops moving (so its pairs are not worked on: their answers stand) until an awake body
 /// hits it faster than [`ImpulseSettings::wake_speed`].
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Rest {

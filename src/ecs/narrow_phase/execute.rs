@@ -58,7 +58,6 @@ pub(crate) struct RunCounts {
     pub exact_pairs: u64,
     pub budget_exhausted: u64,
     pub coherence: u64,
-    pub cached: u64,
     pub tested: u64,
     pub test_time: Duration,
     pub memory_time: Duration,
@@ -72,7 +71,6 @@ impl RunCounts {
             exact_pairs: self.exact_pairs + o.exact_pairs,
             budget_exhausted: self.budget_exhausted + o.budget_exhausted,
             coherence: self.coherence + o.coherence,
-            cached: self.cached + o.cached,
             tested: self.tested + o.tested,
             test_time: self.test_time + o.test_time,
             memory_time: self.memory_time + o.memory_time,
@@ -91,7 +89,6 @@ impl RunCounts {
         }
         self.budget_exhausted += u64::from(o.budget_exhausted);
         self.coherence += u64::from(o.method == Method::Coherence);
-        self.cached += u64::from(o.method == Method::Cached);
         self.tested += u64::from(tested && matches!(o.method, Method::Adb | Method::Exact));
     }
 }
@@ -308,7 +305,7 @@ impl Context<'_> {
                 }
                 out
             }
-            Method::Tracking | Method::SelfCollision | Method::Coherence | Method::Cached => {
+            Method::Tracking | Method::SelfCollision | Method::Coherence => {
                 unreachable!("not a narrow-phase test (planned so)")
             }
         }

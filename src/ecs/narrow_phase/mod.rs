@@ -5,13 +5,13 @@
 //! whose colliders did not change keeps its settled answer and costs nothing. Each active
 //! pair gets a priority ([`pair_priority`](super::pair_priority): last confidence,
 //! closeness, speed, waiting). Under a time budget the exact pairs and the most urgent
-//! others that fit (by the measured cost of a test) are tested and the rest answered from
-//! memory ([`Method::Coherence`]); tested ADB pairs get node-pair slices of the budget in
+//! others that fit (by the measured cost of a test) are tested; the rest keep their last
+//! answer, one run older, and wait for a test (an exact pair past its deadline gets an answer
+//! from memory, [`Method::Coherence`]). Tested ADB pairs get node-pair slices of the budget in
 //! proportion to their priority, and an ADB traversal stops at its slice and reports its
-//! best estimate. Runs of pairs are planned, then tested or answered from memory, on the task
-//! pool, each thread with its own workspaces and each run writing its answers in place; they
-//! are recorded in the table in pair order, so the outcome is the same for any number of
-//! threads.
+//! best estimate. Jobs are planned, then tested, on the task pool, each thread with its own
+//! workspaces and each run of jobs writing its answers in place; they are recorded in the
+//! table in job order, so the outcome is the same for any number of threads.
 mod costs;
 mod execute;
 mod memory;
@@ -54,8 +54,7 @@ pub struct NarrowPhaseState {
 /// Answers the active pairs (all but tracked ones) in parallel.
 ///
 /// Under a time budget, the pairs tested are the most urgent ones that fit (by the measured
-/// cost of a test); the others are answered from memory ([`Method::Coherence`]) and wait less
-/// next time. The deadline stays as a safety net for the tests themselves.
+/// cost of a test); the others keep their last answer and wait less next time. The deadline stays as a safety net for the tests themselves.
 pub fn narrow_phase(
     colliders: Res<ColliderTable>,
     mut pairs: ResMut<PairTable>,
@@ -171,14 +170,16 @@ pub fn narrow_phase(
     // or one run older.
     let work = &mut state.work;
     work.clear();
+    let (mut kept, mut cached) = (0u64, 0u64);
     for job in jobs.iter() {
         if job.chosen || job.apart || job.method == Method::Bounds {
             work.push(*job);
         } else {
             pairs.keep(job.pair, job.cached, run);
+            cached += u64::from(job.cached);
+            kept += u64::from(!job.cached);
         }
     }
-    let kept = (jobs.len() - work.len()) as u64;
     // Tests in parallel, each run of jobs writing its own slots.
     let n = work.len();
     let answers = &mut state.answers;
@@ -233,7 +234,7 @@ pub fn narrow_phase(
     c.exact_pairs += total.exact_pairs;
     c.budget_exhausted_pairs += total.budget_exhausted;
     c.coherence_pairs += total.coherence + kept;
-    c.cached_pairs += total.cached;
+    c.cached_pairs += cached;
     c.tested_pairs += total.tested;
     c.test_time += test_time;
     state

@@ -17,10 +17,6 @@ pub enum Method {
     Tracking,
     /// The self-collision pass of a deformable mesh (`a == b`).
     SelfCollision,
-    /// Not tested: the pair was worked on (one of its colliders changed its fidelity or
-    /// layers, or the pair waited for a test), but neither collider moved since its last
-    /// settled answer, which is given again as it is.
-    Cached,
     /// Not tested: under a time budget, the deadline passed before an exact pair's turn
     /// (exact pairs are always chosen and tested first, so only an overload of exact pairs
     /// alone cuts them). The answer comes from the pair's memory: a pair that collided keeps

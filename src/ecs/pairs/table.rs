@@ -96,8 +96,9 @@ pub struct PairTable {
     pub(crate) hot: Vec<PairHot>,
     free: Vec<u32>,
     live: usize,
-    /// Pairs that need work in the next run: new, tracked, exact pairs a deadline left
-    /// untested.
+    /// Pairs that need work in the coming narrow phase: new ones (created by this run's broad
+    /// phase, worked on in the same run), tracked ones and exact pairs a deadline left
+    /// untested (in the next run).
     pub(crate) pending: Vec<u32>,
     /// Pairs waiting for a test (their last answer was kept, or cut by its budget), first
     /// come first served: each run takes as many as it may test.
@@ -125,7 +126,7 @@ impl PairTable {
 
     /// The pairs worked on in the last run (answered by a test or from memory).
     pub fn active_pairs(&self) -> usize {
-        self.active.len() + self.tracked.len()
+        self.active.len()
     }
 
     /// Touching states that flipped in the last run.
