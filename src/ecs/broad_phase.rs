@@ -21,9 +21,10 @@ use glam::Vec3;
 use super::components::CollisionLayers;
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage};
-use super::pairs::{PairTable, stamp};
+use super::pairs::PairTable;
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderTable};
+use super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::geometry::Aabb;
 
 /// The broad phase's persistent state: every collider's fat box, their sorted order, and
@@ -112,7 +113,12 @@ pub fn update_broad_phase(
     let run = diag.frame;
     let now = stamp(run);
     let (colliders, pairs, state) = (&mut *colliders, &mut *pairs, &mut *state);
-    pairs.begin_run();
+    pairs.begin_run(run);
+    if stamp_sweep_due(run) {
+        for s in &mut state.moved_run {
+            age_stamp(s, now);
+        }
+    }
     // Removed colliders: their pairs go (touching pairs end), then their slots.
     for (slot, entry) in std::mem::take(&mut colliders.removed) {
         if state.present.get(slot as usize).copied().unwrap_or(false) {

@@ -52,6 +52,7 @@ mod pool;
 mod prepare;
 mod response;
 mod schedule;
+mod stamp;
 mod tracking_systems;
 
 pub use broad_phase::BroadPhaseState;
@@ -72,7 +73,7 @@ pub use narrow_phase::{Method, NarrowPhaseState, PairOutcome};
 pub use pairs::{Collisions, PairTable, PairView};
 pub use plugin::StochasticCollisionPlugin;
 pub use pool::CollisionTaskPool;
-pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState};
+pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState, RemovedColliders};
 pub use response::{
     ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Rest,
     Velocity, impulse_response, integrate_velocities, penalty_response, sleep_bodies,

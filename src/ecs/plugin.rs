@@ -13,7 +13,10 @@ use super::events::{
 use super::narrow_phase::{NarrowPhaseState, narrow_phase};
 use super::pairs::PairTable;
 use super::pool::CollisionTaskPool;
-use super::prepare::{ColliderTable, PrepareState, refit_deformables, update_colliders};
+use super::prepare::{
+    ColliderTable, PrepareState, RemovedColliders, note_removed, refit_deformables,
+    update_colliders,
+};
 use super::schedule::CollisionSystems;
 use super::tracking_systems::{
     FeaturePairs, TrackingState, forget_untracked, holds_tracking_state, needs_self_pass,
@@ -107,6 +110,8 @@ impl Plugin for StochasticCollisionPlugin {
             .init_resource::<CollisionDiagnostics>()
             .init_resource::<ColliderTable>()
             .init_resource::<PrepareState>()
+            .init_resource::<RemovedColliders>()
+            .add_observer(note_removed)
             .init_resource::<BroadPhaseState>()
             .init_resource::<PairTable>()
             .init_resource::<NarrowPhaseState>()

@@ -56,6 +56,23 @@ impl Record {
     }
 }
 
+#[cfg(test)]
+impl PairMemory {
+    /// What a settled exact test in `run` leaves.
+    pub(crate) fn exact_for_tests(collides: bool, run: u64) -> Self {
+        Self {
+            probability: if collides { 1.0 } else { 0.0 },
+            collides,
+            settled: true,
+            stale: 0,
+            tested_run: run,
+            method: Method::Exact,
+            p_min: 1.0,
+            boxes_apart: false,
+        }
+    }
+}
+
 /// The confidence of an answer `memory` of a pair whose colliders were `offset` apart at the
 /// test, now: the tested one, drawn towards ½ as the colliders moved relative to each other
 /// since (by `e^(−drift / scale)`, the scale half the smaller collider's box size: a pair that
@@ -76,7 +93,8 @@ pub(crate) fn decayed_probability(
 /// its triangle pair at the current poses (a box contact stays, without its depth); one that
 /// did not, or was never tested, collides when its oriented root boxes overlap, with
 /// probability ½ and a box contact of half the depth (level geometry must not be passed
-/// through); otherwise "not colliding". The memory stays (one run staler).
+/// through); otherwise "not colliding". A memory older than either collider's geometry
+/// counts as none. The memory stays (one run staler).
 pub(crate) fn exact_from_memory(
     job: &Job,
     memory: Option<&PairMemory>,
@@ -98,13 +116,23 @@ pub(crate) fn exact_from_memory(
         computed_run: memory.map_or(run, |m| m.tested_run),
     };
     let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
+    // What was found on other geometry (a swapped mesh) says nothing about this one.
+    let geometry_since = ea.geometry_since.max(eb.geometry_since);
+    let memory = memory.filter(|m| m.tested_run >= geometry_since);
+    let (na, nb) = (ma.mesh().triangle_count(), mb.mesh().triangle_count());
     match memory {
         Some(m) if m.collides => {
             out.collides = true;
             out.probability = decayed_probability(m, slot.offset, (ea, eb));
             out.contacts.extend(slot.contact.map(|c| match c.triangles {
-                Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
-                None => ContactPoint { depth: 0.0, ..c },
+                Some(t) if (t.a as usize) < na && (t.b as usize) < nb => {
+                    triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t)
+                }
+                _ => ContactPoint {
+                    depth: 0.0,
+                    triangles: None,
+                    ..c
+                },
             }));
         }
         _ if root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) => {
@@ -125,4 +153,73 @@ pub(crate) fn exact_from_memory(
         offset: slot.offset,
     });
     (out, record)
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy_ecs::entity::Entity;
+
+    use super::*;
+    use crate::bvh::TrianglePair;
+
+    fn entry(index: u32, subdivisions: u32, x: f32, geometry_since: u64) -> ColliderEntry {
+        ColliderEntry::sphere_for_tests(index, subdivisions, x, geometry_since)
+    }
+
+    /// A memory of a test in run 3 that found triangles 4000 and 5000 in contact.
+    fn remembered() -> (PairMemory, PairSlot) {
+        let memory = PairMemory::exact_for_tests(true, 3);
+        let (a, b) = (
+            Entity::from_raw_u32(1).unwrap(),
+            Entity::from_raw_u32(2).unwrap(),
+        );
+        let slot = PairSlot {
+            a,
+            b,
+            outcome: PairOutcome::untested((a, b), 3),
+            contact: Some(ContactPoint {
+                point: Vec3::new(0.95, 0.0, 0.0),
+                normal: Vec3::X,
+                depth: 0.1,
+                triangles: Some(TrianglePair { a: 4000, b: 5000 }),
+            }),
+            offset: Vec3::new(1.9, 0.0, 0.0),
+            since: 3,
+        };
+        (memory, slot)
+    }
+
+    #[test]
+    fn a_memory_of_swapped_geometry_is_not_read() {
+        // Both meshes swapped in run 5 for icospheres of 20 triangles: the memory is older
+        // than the geometry, so the answer comes from the root boxes (they overlap).
+        let (memory, slot) = remembered();
+        let (ea, eb) = (entry(1, 0, 0.0, 5), entry(2, 0, 1.5, 5));
+        let job = Job::new(0, 0, 1);
+        let (o, _) = exact_from_memory(&job, Some(&memory), &slot, (&ea, &eb), 6);
+        assert!(o.collides);
+        assert_eq!(o.probability, 0.5, "as if never tested");
+        assert!(o.contacts.iter().all(|c| c.triangles.is_none()));
+    }
+
+    #[test]
+    fn a_remembered_triangle_the_mesh_no_longer_has_is_not_read() {
+        // The geometry's identity did not change, but it has fewer triangles than the
+        // memory names (a mesh rewritten in place): the contact stays, without triangles.
+        let (memory, slot) = remembered();
+        let (ea, eb) = (entry(1, 0, 0.0, 0), entry(2, 0, 1.9, 0));
+        let job = Job::new(0, 0, 1);
+        let (o, _) = exact_from_memory(&job, Some(&memory), &slot, (&ea, &eb), 6);
+        assert!(o.collides);
+        assert_eq!(o.contacts.len(), 1);
+        assert_eq!(o.contacts[0].triangles, None);
+        assert_eq!(o.contacts[0].point, Vec3::new(0.95, 0.0, 0.0));
+        // Triangles it has are read again at the current poses.
+        let (ea, eb) = (entry(1, 4, 0.0, 0), entry(2, 4, 1.9, 0));
+        let (o, _) = exact_from_memory(&job, Some(&memory), &slot, (&ea, &eb), 6);
+        assert_eq!(
+            o.contacts[0].triangles,
+            Some(TrianglePair { a: 4000, b: 5000 })
+        );
+    }
 }

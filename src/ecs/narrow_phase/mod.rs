@@ -25,9 +25,10 @@ use bevy_ecs::prelude::*;
 use super::budget::{SliceShare, WorkRate};
 use super::config::{CollisionConfig, FrameBudget};
 use super::diagnostics::{CollisionDiagnostics, Stage};
-use super::pairs::{PairEnds, PairTable, stamp};
+use super::pairs::{PairEnds, PairTable};
 use super::pool::CollisionTaskPool;
 use super::prepare::ColliderTable;
+use super::stamp::stamp;
 use costs::PairCosts;
 use execute::{Answer, ChunkWork, Context, Deadlines, RunCounts};
 pub(crate) use execute::{spread, with_workspaces};
@@ -49,6 +50,9 @@ pub struct NarrowPhaseState {
     rate: WorkRate,
     costs: PairCosts,
     exact_node_pairs: f64,
+    /// The run of the last change of configuration: answers found before it are not reused
+    /// as they are.
+    config_run: u64,
 }
 
 /// Answers the active pairs (all but tracked ones) in parallel.
@@ -67,6 +71,10 @@ pub fn narrow_phase(
     let state = &mut *state;
     let run = diag.frame;
     let config_changed = config.is_changed();
+    if config_changed {
+        state.config_run = run;
+    }
+    let config_run = state.config_run;
     // Under a time budget, the waiting pairs taken are about as many as could be tested: twice
     // the most the budget holds at the measured cost of a test per thread, or of what was
     // tested last time, and a few more (the rest waits).
@@ -107,7 +115,7 @@ pub fn narrow_phase(
                 let e = pairs.ends(p);
                 *job = Job::new(p, e.body_a, e.body_b);
             }
-            **counts = plan_jobs(c, colliders, pairs, run, config_changed);
+            **counts = plan_jobs(c, colliders, pairs, run, config_run);
         });
     }
     let plan = plans.iter().fold(PlanCounts::default(), PlanCounts::add);

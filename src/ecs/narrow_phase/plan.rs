@@ -66,14 +66,14 @@ impl Job {
 
 /// Fills in each job of a run of active pairs: its method (`Tracking` and `SelfCollision`:
 /// handed over to the Tracking stage), whether the boxes are apart, whether the last answer
-/// still holds, and its priority (`run`: this run's number; after a change of configuration
-/// no answer is reused as is).
+/// still holds, and its priority (`run`: this run's number; `config_run`: the run of the
+/// last change of configuration, before which no answer is reused as is).
 pub(crate) fn plan_jobs(
     jobs: &mut [Job],
     colliders: &ColliderTable,
     pairs: &PairTable,
     run: u64,
-    config_changed: bool,
+    config_run: u64,
 ) -> PlanCounts {
     let plans = colliders.plans();
     for job in jobs.iter_mut() {
@@ -97,14 +97,13 @@ pub(crate) fn plan_jobs(
             continue;
         }
         let memory = pairs.hot(job.pair).memory.as_ref();
-        // Settled, asked for the same way, the configuration the same, and neither pose nor
+        // Settled, asked for the same way, under this configuration, and neither pose nor
         // geometry changed since: the answer still holds.
-        job.cached = !config_changed
-            && memory.is_some_and(|m| {
-                m.settled
-                    && (m.method, m.p_min) == (job.method, job.p_min)
-                    && m.tested_run >= ea.still_since.max(eb.still_since)
-            });
+        job.cached = memory.is_some_and(|m| {
+            m.settled
+                && (m.method, m.p_min) == (job.method, job.p_min)
+                && m.tested_run >= ea.still_since.max(eb.still_since).max(config_run)
+        });
         // A cached answer that does not collide needs no priority (no test, no contact).
         if job.cached && !memory.is_some_and(|m| m.collides) {
             continue;
@@ -333,6 +332,40 @@ mod tests {
         let cut = priority_cut(&plan.optional, 100);
         choose_tests(&mut jobs, Some(cut));
         assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
+    }
+
+    #[test]
+    fn an_answer_found_before_a_change_of_configuration_is_not_reused() {
+        use super::super::super::pairs::Record;
+        use super::super::super::prepare::ColliderEntry;
+        use super::super::{PairMemory, PairOutcome};
+        let mut colliders = ColliderTable::default();
+        let (ea, eb) = (
+            ColliderEntry::sphere_for_tests(1, 0, 0.0, 1),
+            ColliderEntry::sphere_for_tests(2, 0, 1.5, 1),
+        );
+        let ends = ((ea.entity, 0), (eb.entity, 1));
+        assert_eq!((colliders.insert(ea), colliders.insert(eb)), (0, 1));
+        let mut pairs = PairTable::default();
+        let p = pairs.create(ends.0, ends.1, 1);
+        // Tested and settled in run 3; both at rest since run 1.
+        let memory = PairMemory::exact_for_tests(true, 3);
+        let o = PairOutcome::untested((ends.0.0, ends.1.0), 3);
+        let record = Record {
+            memory,
+            contact: None,
+            offset: glam::Vec3::ZERO,
+        };
+        pairs.answer(p, o, Some(record), 3);
+        let cached = |config_run: u64| {
+            let mut jobs = [Job::new(p, 0, 1)];
+            plan_jobs(&mut jobs, &colliders, &pairs, 9, config_run);
+            jobs[0].cached
+        };
+        assert!(cached(1), "configuration unchanged since before the test");
+        assert!(cached(3), "changed in the test's run (before it)");
+        // Changed in run 4: in every run after it too, the answer is not reused as it is.
+        assert!(!cached(4));
     }
 
     #[test]

@@ -7,7 +7,8 @@ use super::super::contact::ContactPoint;
 use super::super::diagnostics::CollisionDiagnostics;
 use super::super::narrow_phase::{Method, PairOutcome, decayed_probability};
 use super::super::prepare::ColliderTable;
-use super::table::{PairEnds, PairHot, PairSlot, PairTable, stamp};
+use super::super::stamp::stamp;
+use super::table::{PairEnds, PairHot, PairSlot, PairTable};
 
 /// The collision pipeline's pairs, as a system parameter (read-only: any number of systems
 /// may read it in parallel).

@@ -5,4 +5,4 @@ mod table;
 
 pub use collisions::{Collisions, PairView};
 pub use table::PairTable;
-pub(crate) use table::{PairEnds, PairSlot, Record, stamp};
+pub(crate) use table::{PairEnds, PairSlot, Record};

@@ -7,6 +7,7 @@ use glam::Vec3;
 
 use super::super::contact::ContactPoint;
 use super::super::narrow_phase::{Method, PairMemory, PairOutcome};
+use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
 
 /// What a pair's last answer was in full: read when it is reported, written when it is
 /// computed (every run reads [`PairHot`] instead).
@@ -28,7 +29,8 @@ pub(crate) struct PairSlot {
 
 /// What every run reads of a pair, in a compact array of its own, so that going over the
 /// pairs of the colliders that moved touches little memory. Run stamps are the run's number
-/// modulo 2³² (compared for equality, or subtracted for ages below 2³² runs).
+/// modulo 2³² (compared for equality, or subtracted for ages), aged so that they never alias
+/// ([`age_stamp`](super::super::stamp::age_stamp)).
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct PairEnds {
     /// The colliders' slots (the first is the smaller entity's).
@@ -58,12 +60,6 @@ pub(crate) struct PairHot {
     pub touching: bool,
     /// What the last test found (`None`: never tested).
     pub memory: Option<PairMemory>,
-}
-
-/// A run's number as a stamp (see [`PairEnds`]).
-#[inline]
-pub(crate) fn stamp(run: u64) -> u32 {
-    run as u32
 }
 
 /// A pair whose touching state flipped in this run (or that was removed while touching).
@@ -286,13 +282,23 @@ impl PairTable {
         run: u64,
     ) {
         let (h, s) = (&mut self.hot[i as usize], &mut self.slots[i as usize]);
-        if let Some(r) = record {
-            h.memory = Some(r.memory);
-            s.contact = r.contact;
-            s.offset = r.offset;
+        let apart = record.as_ref().is_some_and(|r| r.memory.boxes_apart);
+        match record {
+            Some(r) => {
+                h.memory = Some(r.memory);
+                s.contact = r.contact;
+                s.offset = r.offset;
+            }
+            // A tracked answer leaves no memory: what an earlier test found is out of date.
+            None if matches!(outcome.method, Method::Tracking | Method::SelfCollision) => {
+                h.memory = None;
+            }
+            None => {}
         }
+        // Tracked pairs and answers from memory are worked on again in the next run, unless
+        // the world boxes are apart (then nothing needs work until a collider moves).
         let (pending, waits) = match outcome.method {
-            Method::Tracking | Method::SelfCollision | Method::Coherence => (true, false),
+            Method::Tracking | Method::SelfCollision | Method::Coherence => (!apart, false),
             _ => (false, outcome.budget_exhausted),
         };
         self.ends[i as usize].checked_run = stamp(outcome.computed_run);
@@ -306,15 +312,16 @@ impl PairTable {
         }
     }
 
-    /// Pair `i` worked on in this run but not tested: its last answer stands, one run older
-    /// (`cached`: it still holds, nothing moved); unless cached, it waits for a test.
+    /// Pair `i` worked on in this run but not tested: its last answer stands (its touching
+    /// state too), one run older (`cached`: it still holds, nothing moved); unless cached, it
+    /// waits for a test.
     pub(crate) fn keep(&mut self, i: u32, cached: bool, run: u64) {
         let h = &mut self.hot[i as usize];
-        let collides = h.memory.is_some_and(|m| m.collides);
+        let touching = h.touching;
         if !cached && let Some(m) = &mut h.memory {
             m.stale = m.stale.saturating_add(1);
         }
-        self.flip_if(i, collides, run);
+        self.flip_if(i, touching, run);
         if !cached {
             self.wait(i);
         }
@@ -341,10 +348,118 @@ impl PairTable {
         }
     }
 
-    /// Starts a run: clears the last run's lists of answers.
-    pub(crate) fn begin_run(&mut self) {
+    /// Starts run `run`: clears the last run's lists of answers (and ages the stamps when
+    /// due, [`age_stamp`](super::super::stamp::age_stamp)).
+    pub(crate) fn begin_run(&mut self, run: u64) {
         self.tracked.clear();
         self.colliding.clear();
         self.transitions.clear();
+        if stamp_sweep_due(run) {
+            let now = stamp(run);
+            for e in &mut self.ends {
+                age_stamp(&mut e.active_run, now);
+                age_stamp(&mut e.checked_run, now);
+                age_stamp(&mut e.pending_run, now);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use smallvec::SmallVec;
+
+    use super::*;
+    use crate::ecs::narrow_phase::PairMemory;
+
+    fn entities() -> (Entity, Entity) {
+        (
+            Entity::from_raw_u32(1).unwrap(),
+            Entity::from_raw_u32(2).unwrap(),
+        )
+    }
+
+    fn outcome(method: Method, collides: bool, run: u64) -> PairOutcome {
+        let mut o = PairOutcome::exact(entities(), method, 0, 1.0, SmallVec::new(), run);
+        o.collides = collides;
+        o
+    }
+
+    fn exact_memory(collides: bool, run: u64) -> Record {
+        Record {
+            memory: PairMemory::exact_for_tests(collides, run),
+            contact: None,
+            offset: Vec3::ZERO,
+        }
+    }
+
+    #[test]
+    fn a_kept_answer_keeps_the_touching_state_of_the_last_answer() {
+        let (a, b) = entities();
+        let mut t = PairTable::default();
+        let i = t.create((a, 0), (b, 1), 1);
+        // An exact test found them apart; then tracking (no memory of its own) finds contact.
+        t.answer(
+            i,
+            outcome(Method::Exact, false, 1),
+            Some(exact_memory(false, 1)),
+            1,
+        );
+        t.begin_run(2);
+        t.answer(i, outcome(Method::Tracking, true, 2), None, 2);
+        assert!(t.hot(i).touching);
+        assert_eq!(
+            t.hot(i).memory,
+            None,
+            "the exact test's memory is out of date"
+        );
+        // Kept in the next runs (not tested): still touching, no transition, listed as colliding.
+        for run in 3..6 {
+            t.begin_run(run);
+            t.keep(i, false, run);
+            assert!(t.hot(i).touching, "run {run}");
+            assert!(t.transitions.is_empty(), "run {run}");
+            assert_eq!(t.colliding, vec![i], "run {run}");
+        }
+    }
+
+    #[test]
+    fn a_tracked_pair_with_its_boxes_apart_is_not_pending() {
+        let (a, b) = entities();
+        let mut t = PairTable::default();
+        let i = t.create((a, 0), (b, 1), 1);
+        t.pending.clear();
+        let mut apart = exact_memory(false, 2);
+        apart.memory.boxes_apart = true;
+        apart.memory.method = Method::Tracking;
+        t.answer(i, outcome(Method::Tracking, false, 2), Some(apart), 2);
+        assert!(t.pending.is_empty());
+        assert!(t.ends(i).quiet, "nothing to do until a collider moves");
+        // With its boxes overlapping, a tracked pair is worked on in every run.
+        t.answer(i, outcome(Method::Tracking, false, 3), None, 3);
+        assert_eq!(t.pending, vec![i]);
+    }
+
+    #[test]
+    fn stamps_do_not_alias_after_two_to_the_32_runs() {
+        let (a, b) = entities();
+        let mut t = PairTable::default();
+        let i = t.create((a, 0), (b, 1), 5);
+        t.activate(i, 5);
+        t.active.clear();
+        // Runs go by; the sweeps age the stamps.
+        for k in 1..=4u64 {
+            t.begin_run(k << 30);
+        }
+        let later = 5 + (1u64 << 32);
+        t.begin_run(later);
+        t.activate(i, later);
+        assert_eq!(t.active, vec![i], "not taken for this run's stamp");
+        t.mark_pending(i, later);
+        assert_eq!(
+            t.pending,
+            vec![i, i],
+            "created pending, and again in this run"
+        );
     }
 }

@@ -8,6 +8,7 @@ use glam::{Vec3, Vec3A};
 use smallvec::SmallVec;
 
 use super::super::components::{CollisionLayers, Fidelity};
+use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::adb::AdbTree;
 use crate::bvh::CollisionMesh;
 use crate::geometry::{Aabb, Pose};
@@ -75,6 +76,13 @@ pub struct ColliderEntry {
     /// since which the entity's pose and geometry are unchanged: an answer computed in that
     /// run or later still holds for a rigid pair.
     pub still_since: u64,
+    /// The run since which its geometry is the same (a swapped mesh or collider is new
+    /// geometry; a deformable mesh refitted in place is not): what a pair's memory says of
+    /// triangles holds only from then on.
+    pub geometry_since: u64,
+    /// The identity of its geometry ([`Geometry::id`]), kept while the table lets go of a
+    /// deformable mesh during its refit.
+    pub(crate) geometry_id: usize,
     /// Its pairs' slots in the [`PairTable`](super::super::PairTable).
     pub(crate) pairs: SmallVec<[u32; 12]>,
     /// The last run in which it changed (listed in [`ColliderTable::changed`] once per run).
@@ -93,6 +101,31 @@ impl ColliderEntry {
     /// Its pairs' slots in the pair table.
     pub(crate) fn pair_slots(&self) -> &[u32] {
         &self.pairs
+    }
+
+    /// A rigid exact icosphere of radius 1 (`subdivisions`) at `x` on the x axis, entity
+    /// `index`, unchanged since `since`.
+    #[cfg(test)]
+    pub(crate) fn sphere_for_tests(index: u32, subdivisions: u32, x: f32, since: u64) -> Self {
+        let mesh = CollisionMesh::new(crate::mesh::generate::icosphere(1.0, subdivisions));
+        let geometry = Geometry::Rigid(Arc::new(AdbTree::new(mesh)));
+        let pose = Pose::new(Vec3::new(x, 0.0, 0.0), glam::Quat::IDENTITY);
+        Self {
+            entity: Entity::from_raw_u32(index).expect("a valid index"),
+            aabb: super::world_aabb(&geometry.mesh().bvh().root_aabb(), &pose),
+            geometry_id: geometry.id(),
+            geometry,
+            pose,
+            fidelity: Fidelity::Exact,
+            layers: Default::default(),
+            self_collision: false,
+            motion: Vec3::ZERO,
+            still_since: since,
+            geometry_since: since,
+            pairs: Default::default(),
+            changed_run: 0,
+            filter_run: 0,
+        }
     }
 }
 
@@ -219,9 +252,14 @@ impl ColliderTable {
         &self.changed
     }
 
-    /// Starts a run: forgets the last run's changes; the colliders that moved in the last
+    /// Starts run `run`: ages the change stamps when due, forgets the last run's changes; the colliders that moved in the last
     /// run and not (yet) in this one get zero motion.
-    pub(crate) fn begin_run(&mut self) {
+    pub(crate) fn begin_run(&mut self, run: u64) {
+        if stamp_sweep_due(run) {
+            for b in &mut self.boxes {
+                age_stamp(&mut b.stamp, stamp(run));
+            }
+        }
         self.changed.clear();
         for i in std::mem::take(&mut self.moved) {
             if let Some(e) = self.slots[i as usize].as_mut() {
@@ -246,7 +284,7 @@ impl ColliderTable {
     /// Marks slot `i` as changed in `run` (listed once); `moved`: its pose or geometry changed.
     /// Its world box is read again.
     pub(crate) fn mark_changed(&mut self, i: u32, run: u64, moved: bool) {
-        self.boxes[i as usize] = BoxStamp::new(&self.entry(i).aabb, run as u32);
+        self.boxes[i as usize] = BoxStamp::new(&self.entry(i).aabb, stamp(run));
         self.plans[i as usize] = BodyPlan::of(self.entry(i));
         let e = self.entry_mut(i);
         let first = e.changed_run != run;

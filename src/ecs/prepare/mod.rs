@@ -33,6 +33,30 @@ pub struct PrepareState {
     invalid: EntityHashSet,
 }
 
+/// Entities that lost one of the components a collider is made of (or were despawned) since
+/// the last run, noted by an observer the moment it happens: unlike `RemovedComponents`,
+/// which forgets after two frames, nothing is lost when the plugin's schedule does not run
+/// in a frame (`FixedPostUpdate` without a fixed step).
+#[derive(Resource, Debug, Default)]
+pub struct RemovedColliders {
+    entities: Vec<Entity>,
+}
+
+/// The components whose removal changes or removes a collider.
+type ColliderParts = (
+    Collider,
+    Deformable,
+    Fidelity,
+    CollisionLayers,
+    SelfCollision,
+    ColliderPose,
+);
+
+/// Observer: notes an entity that lost a part of its collider (see [`RemovedColliders`]).
+pub fn note_removed(removed: On<Remove<ColliderParts>>, mut list: ResMut<RemovedColliders>) {
+    list.entities.push(removed.entity);
+}
+
 /// Run condition: some deformable mesh has new positions.
 pub fn any_stale(q: Query<&Deformable>) -> bool {
     q.iter().any(|d| d.stale)
@@ -127,11 +151,7 @@ type AnyChange = Or<(
 pub struct ColliderChanges<'w, 's> {
     all: Query<'w, 's, ColliderData<'static>, IsCollider>,
     changed: Query<'w, 's, ColliderData<'static>, (IsCollider, AnyChange)>,
-    colliders: RemovedComponents<'w, 's, Collider>,
-    deformables: RemovedComponents<'w, 's, Deformable>,
-    fidelities: RemovedComponents<'w, 's, Fidelity>,
-    layers: RemovedComponents<'w, 's, CollisionLayers>,
-    markers: RemovedComponents<'w, 's, SelfCollision>,
+    removed: ResMut<'w, RemovedColliders>,
 }
 
 /// Brings the [`ColliderTable`] up to date: validates and adds new colliders, updates those
@@ -150,7 +170,7 @@ pub fn update_colliders(
     }
     let start = Instant::now();
     let run = diag.frame;
-    table.begin_run();
+    table.begin_run(run);
     let full = config.is_changed();
     let mut update = Update {
         table: &mut table,
@@ -160,14 +180,7 @@ pub fn update_colliders(
         run,
         full,
     };
-    let mut again: Vec<Entity> = changes
-        .colliders
-        .read()
-        .chain(changes.deformables.read())
-        .chain(changes.fidelities.read())
-        .chain(changes.layers.read())
-        .chain(changes.markers.read())
-        .collect();
+    let mut again = std::mem::take(&mut changes.removed.entities);
     if full {
         for data in &changes.all {
             update.entry(data);
@@ -179,8 +192,10 @@ pub fn update_colliders(
     }
     again.sort_unstable();
     again.dedup();
-    for entity in again {
+    for &entity in &again {
         match changes.all.get(entity) {
+            // Updated above already (twice would read as a move of zero).
+            Ok(_) if full || changes.changed.contains(entity) => {}
             Ok(data) => update.entry(data),
             Err(_) => {
                 update.invalid.remove(&entity);
@@ -188,6 +203,9 @@ pub fn update_colliders(
             }
         }
     }
+    // The buffer is kept for the next run's removals.
+    again.clear();
+    changes.removed.entities = again;
     let items = table.changed().len() as u64;
     diag.record(Stage::Prepare, start.elapsed(), items);
 }
@@ -241,6 +259,7 @@ impl Update<'_, '_> {
             let aabb = tight_world_aabb(geometry.mesh().bvh(), &pose).inflated(margin);
             let i = self.table.insert(ColliderEntry {
                 entity,
+                geometry_id: geometry.id(),
                 geometry,
                 pose,
                 aabb,
@@ -249,6 +268,7 @@ impl Update<'_, '_> {
                 self_collision,
                 motion: Vec3::ZERO,
                 still_since: run,
+                geometry_since: run,
                 pairs: Default::default(),
                 changed_run: 0,
                 filter_run: run,
@@ -257,7 +277,9 @@ impl Update<'_, '_> {
             return;
         };
         let e = self.table.entry_mut(i);
-        let same_geometry = e.geometry.id() == geometry.id();
+        // (The table holds a placeholder while a deformable mesh is refitted in place: the
+        // identity kept says whether it is the same mesh.)
+        let same_geometry = e.geometry_id == geometry.id();
         // A deformable mesh updated here was refitted (or its marker changed): it moved.
         let moved = e.pose != pose || !same_geometry || !e.is_rigid();
         let filters = e.layers != layers || e.self_collision != self_collision;
@@ -272,6 +294,10 @@ impl Update<'_, '_> {
                 Vec3::ZERO
             };
             e.still_since = run;
+            if !same_geometry {
+                e.geometry_since = run;
+                e.geometry_id = geometry.id();
+            }
             e.pose = pose;
             e.geometry = geometry;
         }
