@@ -1,30 +1,11 @@
-//! Optional features: the default `FixedPostUpdate` schedule ticked by bevy_time
-//! (`fixed_time`), the stage timings in bevy_diagnostic's store (`diagnostic`).
-#![cfg(any(feature = "fixed_time", feature = "diagnostic"))]
+//! Optional features: the stage timings in bevy_diagnostic's store (`diagnostic`).
+#![cfg(feature = "diagnostic")]
 mod plugin_support;
 
 use bevy_app::prelude::*;
 use plugin_support::*;
 use stochastic_collision::prelude::*;
 
-#[cfg(feature = "fixed_time")]
-#[test]
-fn default_schedule_runs_with_the_time_plugin() {
-    let mut app = App::new();
-    app.add_plugins((bevy_time::TimePlugin, StochasticCollisionPlugin::default()))
-        .insert_resource(bevy_time::TimeUpdateStrategy::FixedTimesteps(1));
-    let ball = ball(1.0);
-    spawn(&mut app, (ball.clone(), at(0.0, 0.0, 0.0)));
-    spawn(&mut app, (ball, at(1.5, 0.0, 0.0)));
-    for _ in 0..3 {
-        app.update();
-    }
-    let d = app.world().resource::<CollisionDiagnostics>();
-    assert!(d.frame >= 1, "FixedPostUpdate ran");
-    assert_eq!(d.counters.started, 1);
-}
-
-#[cfg(feature = "diagnostic")]
 #[test]
 fn stage_timings_reach_the_diagnostics_store() {
     use bevy_diagnostic::{DiagnosticsPlugin, DiagnosticsStore};

@@ -41,7 +41,7 @@ impl ClothState {
 }
 
 pub fn setup(app: &mut App, options: &Options) {
-    app.add_plugins(PenaltyResponsePlugin::in_schedule(PostUpdate))
+    app.add_plugins(PenaltyResponsePlugin::default())
         .add_systems(PostUpdate, step_cloth.before(CollisionSystems::Prepare));
     let world = app.world_mut();
     world.spawn((

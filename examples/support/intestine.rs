@@ -70,7 +70,7 @@ fn vertex_normals(mesh: &TriMesh) -> Vec<Vec3> {
 }
 
 pub fn setup(app: &mut App, options: &Options) {
-    app.add_plugins(PenaltyResponsePlugin::in_schedule(PostUpdate))
+    app.add_plugins(PenaltyResponsePlugin::default())
         .add_systems(PostUpdate, peristalsis.before(CollisionSystems::Prepare));
     let (mesh, _) = intestine_mesh();
     let size = mesh.aabb().extents().max_element();

@@ -136,6 +136,7 @@ pub struct AdbTree {
     calibration: Option<Calibration>,
     interior: Option<InteriorMap>,
     confidence_calibration: Option<ConfidenceCalibration>,
+    options: AdbBuildOptions,
 }
 
 impl AdbTree {
@@ -210,6 +211,7 @@ impl AdbTree {
             calibration: None,
             interior,
             confidence_calibration: None,
+            options,
         };
         if let Some(fit) = options.fit {
             let base = Arc::new(PlanarityEstimator::default());
@@ -220,6 +222,32 @@ impl AdbTree {
             }
         }
         tree
+    }
+
+    /// The options it was built with.
+    #[inline]
+    pub fn options(&self) -> &AdbBuildOptions {
+        &self.options
+    }
+
+    /// The tree of this mesh scaled by `scale` along its local axes (a negative factor
+    /// mirrors it; triangles keep facing outwards), built with the same options.
+    ///
+    /// # Errors
+    /// As [`TriMesh::scaled`](crate::mesh::TriMesh::scaled).
+    ///
+    /// # Example
+    /// ```
+    /// use stochastic_collision::adb::AdbTree;
+    /// use stochastic_collision::prelude::*;
+    /// let ball = AdbTree::new(CollisionMesh::new(generate::icosphere(1.0, 1)));
+    /// let big = ball.scaled(Vec3::splat(2.0))?;
+    /// assert_eq!(big.collision_mesh().bvh().root_aabb().max.x, 2.0 * ball.collision_mesh().bvh().root_aabb().max.x);
+    /// # Ok::<(), MeshError>(())
+    /// ```
+    pub fn scaled(&self, scale: Vec3) -> Result<AdbTree, crate::mesh::MeshError> {
+        let mesh = self.mesh.mesh().scaled(scale)?;
+        Ok(Self::build_with(CollisionMesh::new(mesh), self.options))
     }
 
     /// The calibration fitted on this mesh at build time, if any.

@@ -16,8 +16,10 @@ use crate::mesh::{MeshError, TriMesh};
 /// `Collider` and there is one tree in memory. Building the ADB-tree costs more than the BVH
 /// (cell counts and a calibration fit), so build each mesh once and clone the collider.
 ///
-/// Inserting a `Collider` also inserts, if missing, a [`ColliderPose`] and a
-/// [`CollidingEntities`] (required components).
+/// Inserting a `Collider` also inserts, if missing, a [`ColliderPose`], a [`ColliderScale`]
+/// and a [`CollidingEntities`] (required components). A scaled collider is queried with a
+/// scaled copy of the tree, built once per mesh and scale and shared by every entity that
+/// uses that mesh at that scale.
 ///
 /// # Example
 /// ```
@@ -27,7 +29,7 @@ use crate::mesh::{MeshError, TriMesh};
 /// assert!(std::sync::Arc::ptr_eq(ball.tree(), same_tree.tree()));
 /// ```
 #[derive(Component, Clone, Debug)]
-#[require(ColliderPose, CollidingEntities)]
+#[require(ColliderPose, ColliderScale, CollidingEntities)]
 pub struct Collider {
     tree: Arc<AdbTree>,
 }
@@ -80,7 +82,9 @@ impl Collider {
 /// the collision schedule. Non-finite positions are reported as a
 /// [`CollisionError`](super::CollisionError) and the entity is skipped until they are fixed.
 /// Deformable meshes have no ADB-tree (its cell counts are not refittable): a pair with a
-/// deformable mesh and [`Fidelity::Adb`] is tested exactly.
+/// deformable mesh and [`Fidelity::Adb`] is tested exactly. A [`ColliderScale`] scales the
+/// positions at each refit (positive factors only: a mirrored deformable mesh is reported
+/// invalid).
 ///
 /// # Example
 /// ```
@@ -92,12 +96,16 @@ impl Collider {
 /// assert_eq!(cloth.positions().len(), 25);
 /// ```
 #[derive(Component, Clone, Debug)]
-#[require(ColliderPose, CollidingEntities)]
+#[require(ColliderPose, ColliderScale, CollidingEntities)]
 pub struct Deformable {
     pub(crate) mesh: Arc<CollisionMesh>,
     pub(crate) positions: Vec<Vec3>,
     pub(crate) stale: bool,
     pub(crate) broken: Option<MeshError>,
+    /// The [`ColliderScale`] the mesh was last refitted at (its positions times this).
+    pub(crate) scale_applied: Vec3,
+    /// Reused buffer of scaled positions.
+    pub(crate) scaled: Vec<Vec3>,
 }
 
 impl Deformable {
@@ -109,6 +117,8 @@ impl Deformable {
             positions,
             stale: false,
             broken: None,
+            scale_applied: Vec3::ONE,
+            scaled: Vec::new(),
         }
     }
 
@@ -125,7 +135,8 @@ impl Deformable {
         &mut self.positions
     }
 
-    /// The mesh and tree as of the last refit (what the collision stages see).
+    /// The mesh and tree as of the last refit, scaled by the entity's [`ColliderScale`] (what
+    /// the collision stages see).
     #[inline]
     pub fn collision_mesh(&self) -> &CollisionMesh {
         &self.mesh
@@ -293,11 +304,15 @@ impl CollidingEntities {
     }
 }
 
-/// The pose the collision stages use (rotation and translation; no scale).
+/// The pose the collision stages use (rotation and translation; the scale is
+/// [`ColliderScale`]).
 ///
-/// With the `transform` feature (default), an entity that also has bevy_transform's
-/// `GlobalTransform` gets this overwritten from it at the start of every run (scale is
-/// ignored); otherwise set it yourself (headless apps, simulations that own their poses).
+/// With the `transform` feature (default), an entity with bevy_transform's `Transform` gets
+/// this (and its [`ColliderScale`]) from its `Transform` composed with its ancestors', at the
+/// start of every run (see [`CollisionSystems::Prepare`](super::CollisionSystems)): the
+/// pose of this very run, without waiting for transform propagation, and for a new entity
+/// the pose it was spawned at. An entity with only a `GlobalTransform` gets it from that.
+/// Otherwise set it yourself (headless apps, simulations that own their poses).
 #[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
 pub struct ColliderPose(pub Pose);
 
@@ -305,6 +320,50 @@ impl ColliderPose {
     /// A pose at `translation`, not rotated.
     pub fn from_translation(translation: Vec3) -> Self {
         Self(Pose::from_translation(translation))
+    }
+}
+
+/// The scale of a collider's mesh along its local axes, applied before its
+/// [`ColliderPose`] (default 1: the mesh as built). Non-uniform and negative (mirroring)
+/// factors are allowed; a factor that is zero, not finite or below `1e-6` in magnitude makes
+/// the entity invalid (a [`CollisionError`](super::CollisionError), the entity skipped).
+///
+/// With the `transform` feature, entities with a `Transform` get it from the `Transform`
+/// (see [`ColliderPose`]).
+///
+/// # Example
+/// ```
+/// use bevy_app::prelude::*;
+/// use bevy_ecs::prelude::*;
+/// use stochastic_collision::prelude::*;
+///
+/// let mut app = App::new();
+/// app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate));
+/// let ball = Collider::new(generate::icosphere(1.0, 2));
+/// // Radius 2 (scaled) at the origin reaches a ball of radius 1 at x = 2.5.
+/// app.world_mut().spawn((ball.clone(), ColliderScale::uniform(2.0)));
+/// app.world_mut().spawn((ball, ColliderPose::from_translation(Vec3::X * 2.5)));
+/// app.update();
+/// assert_eq!(app.world().resource::<Messages<CollisionStarted>>().len(), 1);
+/// ```
+#[derive(Component, Clone, Copy, Debug, PartialEq)]
+pub struct ColliderScale(pub Vec3);
+
+impl Default for ColliderScale {
+    fn default() -> Self {
+        Self(Vec3::ONE)
+    }
+}
+
+impl ColliderScale {
+    /// The same factor along every axis.
+    pub fn uniform(factor: f32) -> Self {
+        Self(Vec3::splat(factor))
+    }
+
+    /// Whether the factors are usable: finite and at least `1e-6` in magnitude.
+    pub fn is_valid(&self) -> bool {
+        self.0.is_finite() && self.0.abs().min_element() >= 1e-6
     }
 }
 

@@ -95,7 +95,7 @@ pub struct CollisionConfig {
     /// Contacts reported per self-colliding mesh at most.
     pub max_self_contacts: usize,
     /// Contacts the Response stage may consume per run (`None`: all of them). What is left
-    /// stays in the [`ContactQueue`] for the next run, highest priority first.
+    /// stays in the [`ContactQueue`](super::ContactQueue) for the next run, highest priority first.
     pub response_budget: Option<usize>,
 }
 

@@ -42,6 +42,7 @@ use glam::Vec3;
 use super::components::{CollidingEntities, CollisionEventsEnabled};
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, end_frame};
+use super::narrow_phase::Method;
 use super::pairs::PairTable;
 use crate::bvh::TrianglePair;
 use crate::mesh::MeshError;
@@ -51,24 +52,50 @@ use crate::mesh::MeshError;
 ///
 /// As a message, `entity < other`. As an observer event (entities with
 /// [`CollisionEventsEnabled`]), `entity` is the observed entity.
-#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+///
+/// `method` and `probability` say how sure the start is: an exact answer (`Exact`,
+/// `SelfCollision`: probability 1), an ADB estimate, a tracked contact, a box overlap
+/// (`Bounds`), or an exact pair's answer from memory under overload (`Coherence`, 0.5 when
+/// only the oriented boxes overlapped). Gameplay that must act on certain contacts only
+/// checks [`CollisionStarted::is_certain`].
+#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq)]
 pub struct CollisionStarted {
     /// The first entity (the observed one for observer events).
     #[event_target]
     pub entity: Entity,
     /// The other entity.
     pub other: Entity,
+    /// How the answer that started the contact was found.
+    pub method: Method,
+    /// Its confidence that the pair collides.
+    pub probability: f64,
+}
+
+impl CollisionStarted {
+    /// Whether the contact was found by an exact test (not estimated, guessed from boxes, or
+    /// answered from memory).
+    pub fn is_certain(&self) -> bool {
+        matches!(
+            self.method,
+            Method::Exact | Method::SelfCollision | Method::Tracking
+        ) && self.probability >= 1.0
+    }
 }
 
 /// Two entities stopped touching: written once at the end of each contact interval, also
 /// when one of them was despawned or became invalid. Same conventions as [`CollisionStarted`].
-#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq)]
 pub struct CollisionEnded {
     /// The first entity (the observed one for observer events).
     #[event_target]
     pub entity: Entity,
     /// The other entity.
     pub other: Entity,
+    /// How the answer that ended the contact was found; [`Method::Bounds`] when the pair
+    /// was removed (world boxes parted, an entity despawned, removed or invalid).
+    pub method: Method,
+    /// That answer's confidence that the pair still collides (0 for a removed pair).
+    pub probability: f64,
 }
 
 /// One contact point of a colliding pair answered in this run (written only with
@@ -87,6 +114,8 @@ pub struct Contact {
     pub depth: f32,
     /// Confidence that the pair collides (1 for exact answers).
     pub probability: f64,
+    /// How the pair's answer was found.
+    pub method: Method,
     /// The triangle pair (`a`'s, `b`'s) when the contact comes from one.
     pub triangles: Option<TrianglePair>,
     /// Priority for responses (higher first): the pair's priority, deeper contacts higher.
@@ -107,6 +136,13 @@ pub enum CollisionErrorKind {
         translation: [f32; 3],
         /// The rotation quaternion (x, y, z, w).
         rotation: [f32; 4],
+    },
+    /// The [`ColliderScale`](super::ColliderScale) has a factor that is zero, not finite,
+    /// or below `1e-6` in magnitude.
+    #[error("invalid scale {scale:?}: every factor must be finite and at least 1e-6 in magnitude")]
+    InvalidScale {
+        /// The scale.
+        scale: [f32; 3],
     },
     /// A deformable mesh's new positions were rejected (for example a non-finite vertex).
     #[error("deformable mesh rejected: {0}")]
@@ -258,7 +294,9 @@ pub fn report_collisions(
     let start = Instant::now();
     let frame = diag.frame;
     let pairs = &mut *pairs;
-    pairs.transitions.sort_unstable();
+    pairs
+        .transitions
+        .sort_unstable_by_key(|t| (t.a, t.b, t.started));
     let (mut started, mut ended) = (0u64, 0u64);
     for pass_started in [false, true] {
         for t in pairs
@@ -266,26 +304,28 @@ pub fn report_collisions(
             .iter()
             .filter(|t| t.started == pass_started)
         {
-            let (a, b) = (t.a, t.b);
+            let (a, b, method, probability) = (t.a, t.b, t.method, t.probability);
             set_colliding(&mut colliding, a, b, t.started);
             if t.started {
                 started += 1;
-                writers.started.write(CollisionStarted {
-                    entity: a,
-                    other: b,
-                });
-                notify(&mut commands, &observed, a, b, |entity, other| {
-                    CollisionStarted { entity, other }
-                });
+                let event = |entity, other| CollisionStarted {
+                    entity,
+                    other,
+                    method,
+                    probability,
+                };
+                writers.started.write(event(a, b));
+                notify(&mut commands, &observed, a, b, event);
             } else {
                 ended += 1;
-                writers.ended.write(CollisionEnded {
-                    entity: a,
-                    other: b,
-                });
-                notify(&mut commands, &observed, a, b, |entity, other| {
-                    CollisionEnded { entity, other }
-                });
+                let event = |entity, other| CollisionEnded {
+                    entity,
+                    other,
+                    method,
+                    probability,
+                };
+                writers.ended.write(event(a, b));
+                notify(&mut commands, &observed, a, b, event);
             }
         }
     }
@@ -314,6 +354,7 @@ pub fn report_collisions(
                 normal: c.normal,
                 depth,
                 probability: o.probability,
+                method: o.method,
                 triangles: c.triangles,
                 priority: o.priority * (1.0 + depth.max(0.0)),
                 frame: o.computed_run,

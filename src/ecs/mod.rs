@@ -3,9 +3,10 @@
 //!
 //! # Overview
 //! Add [`StochasticCollisionPlugin`], give entities a [`Collider`] (rigid, shared mesh and
-//! ADB-tree) or a [`Deformable`] (owned, refitted mesh) and a pose ([`ColliderPose`], or
-//! bevy_transform's `GlobalTransform` with the `transform` feature), and read
-//! [`CollisionStarted`] and [`CollisionEnded`] messages, or observe them per entity
+//! ADB-tree) or a [`Deformable`] (owned, refitted mesh) placed with bevy_transform's
+//! `Transform` (with the `transform` feature, the default; else [`ColliderPose`] and
+//! [`ColliderScale`]), and read [`CollisionStarted`] and [`CollisionEnded`] messages (with
+//! the method and confidence of the answer), or observe them per entity
 //! ([`CollisionEventsEnabled`]); read contacts, touching or not, with their confidence and
 //! age through the [`Collisions`] system parameter ([`Contact`] messages on request:
 //! [`CollisionConfig::contact_messages`]).
@@ -13,7 +14,8 @@
 //! The plugin keeps its world between runs: a [`ColliderTable`] (one slot per collider) and a
 //! [`PairTable`] (one slot per pair of close colliders, with its last answer). A run works
 //! only on what changed, through the chained [`CollisionSystems`]:
-//! 1. **Prepare**: the colliders whose pose, mesh, fidelity or layers changed (Bevy's change
+//! 1. **Prepare**: poses and scales from `Transform` (composed with the ancestors'); the
+//!    colliders whose pose, scale, mesh, fidelity or layers changed (Bevy's change
 //!    detection), refit of deformed meshes (parallel), validation (bad entities are reported
 //!    with a [`CollisionError`] and skipped), world boxes.
 //! 2. **BroadPhase**: colliders whose world box left their broad-phase (fat) box, and only
@@ -58,8 +60,8 @@ mod tracking_systems;
 pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{
-    Collider, ColliderPose, CollidingEntities, CollisionEventsEnabled, CollisionLayers, Deformable,
-    Fidelity, SelfCollision,
+    Collider, ColliderPose, ColliderScale, CollidingEntities, CollisionEventsEnabled,
+    CollisionLayers, Deformable, Fidelity, SelfCollision,
 };
 pub use config::{CollisionConfig, FrameBudget};
 pub use contact::ContactPoint;
@@ -75,8 +77,9 @@ pub use plugin::StochasticCollisionPlugin;
 pub use pool::CollisionTaskPool;
 pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState, RemovedColliders};
 pub use response::{
-    ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin, PenaltySettings, Rest,
-    Velocity, impulse_response, integrate_velocities, penalty_response, sleep_bodies,
+    DEFAULT_STEP, ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin,
+    PenaltySettings, Rest, Velocity, impulse_response, integrate_velocities, penalty_response,
+    sleep_bodies,
 };
-pub use schedule::CollisionSystems;
+pub use schedule::{CollisionSchedule, CollisionSystems};
 pub use tracking_systems::{FeaturePairs, TrackingState};

@@ -17,7 +17,7 @@ use super::prepare::{
     ColliderTable, PrepareState, RemovedColliders, note_removed, refit_deformables,
     update_colliders,
 };
-use super::schedule::CollisionSystems;
+use super::schedule::{CollisionSchedule, CollisionSystems};
 use super::tracking_systems::{
     FeaturePairs, TrackingState, forget_untracked, holds_tracking_state, needs_self_pass,
     needs_tracking, prune_feature_pairs, self_collision, track_pairs,
@@ -106,6 +106,7 @@ impl Plugin for StochasticCollisionPlugin {
             .add_message::<Contact>()
             .add_message::<CollisionError>()
             .insert_resource(self.config.clone())
+            .insert_resource(CollisionSchedule(s))
             .insert_resource(CollisionTaskPool::new(self.threads))
             .init_resource::<CollisionDiagnostics>()
             .init_resource::<ColliderTable>()
@@ -146,7 +147,7 @@ impl Plugin for StochasticCollisionPlugin {
         #[cfg(feature = "transform")]
         app.add_systems(
             s,
-            super::prepare::sync_global_transforms
+            super::prepare::sync_transforms
                 .in_set(Prepare)
                 .before(update_colliders)
                 .before(refit_deformables),

@@ -45,10 +45,14 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
 use glam::Vec3;
 
-use super::components::{ColliderPose, Deformable};
+use bevy_ecs::query::QueryItem;
+use bevy_time::Time;
+
+use super::components::{ColliderPose, ColliderScale, Deformable};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::events::{Contact, ContactQueue};
-use super::schedule::CollisionSystems;
+use super::prepare::{Parents, Placement, shift};
+use super::schedule::{CollisionSchedule, CollisionSystems};
 
 /// Linear velocity of a simple rigid body (units per second).
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
@@ -92,8 +96,10 @@ impl Default for Mass {
 pub struct ImpulseSettings {
     /// Gravity applied to bodies with [`Velocity`].
     pub gravity: Vec3,
-    /// Time step of the integration (the schedule's step).
-    pub dt: f32,
+    /// Time step of the integration. `None` (default): bevy_time's `Time` of the schedule
+    /// (`Time<Fixed>`'s step in `FixedPostUpdate`, the frame's delta elsewhere), or
+    /// [`DEFAULT_STEP`] in an app without `TimePlugin` or before time has advanced.
+    pub dt: Option<f32>,
     /// Bounciness in `[0, 1]`.
     pub restitution: f32,
     /// Fraction of the penetration corrected per run.
@@ -112,11 +118,24 @@ pub struct ImpulseSettings {
     pub wake_speed: f32,
 }
 
+/// The time step without a `Time` to read: `Time<Fixed>`'s default (64 Hz).
+pub const DEFAULT_STEP: f32 = 1.0 / 64.0;
+
+impl ImpulseSettings {
+    /// The time step of this run (see [`ImpulseSettings::dt`]).
+    pub fn step(&self, time: Option<&Time>) -> f32 {
+        self.dt.unwrap_or_else(|| {
+            let delta = time.map_or(0.0, Time::delta_secs);
+            if delta > 0.0 { delta } else { DEFAULT_STEP }
+        })
+    }
+}
+
 impl Default for ImpulseSettings {
     fn default() -> Self {
         Self {
             gravity: Vec3::new(0.0, -9.81, 0.0),
-            dt: 1.0 / 60.0,
+            dt: None,
             restitution: 0.2,
             correction: 0.4,
             slop: 0.005,
@@ -130,30 +149,41 @@ impl Default for ImpulseSettings {
 }
 
 /// Impulse response for simple rigid bodies (see [`ContactQueue`]). Add it after
-/// [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin), with the same schedule.
+/// [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin); `default()` runs it in
+/// the collision plugin's schedule.
+#[derive(Default)]
 pub struct ImpulseResponsePlugin {
-    /// The schedule of the collision plugin.
-    pub schedule: Interned<dyn ScheduleLabel>,
+    /// The schedule of the collision plugin (`None`, the default: the schedule the
+    /// [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin) was added to).
+    pub schedule: Option<Interned<dyn ScheduleLabel>>,
     /// Initial settings.
     pub settings: ImpulseSettings,
 }
 
 impl ImpulseResponsePlugin {
-    /// The response in `schedule` with default settings.
+    /// The response in `schedule` with default settings (it must be the collision
+    /// plugin's; [`Default`] takes it from the collision plugin).
     pub fn in_schedule(schedule: impl ScheduleLabel) -> Self {
         Self {
-            schedule: schedule.intern(),
+            schedule: Some(schedule.intern()),
             settings: ImpulseSettings::default(),
         }
+    }
+
+    /// With these settings.
+    pub fn with_settings(mut self, settings: ImpulseSettings) -> Self {
+        self.settings = settings;
+        self
     }
 }
 
 impl Plugin for ImpulseResponsePlugin {
     fn build(&self, app: &mut App) {
+        let schedule = response_schedule(app, self.schedule, "ImpulseResponsePlugin");
         app.insert_resource(self.settings)
             .init_resource::<ContactQueue>()
             .add_systems(
-                self.schedule,
+                schedule,
                 (
                     integrate_velocities.before(CollisionSystems::Prepare),
                     (impulse_response, sleep_bodies)
@@ -165,19 +195,48 @@ impl Plugin for ImpulseResponsePlugin {
     }
 }
 
-/// Moves the awake bodies with [`Velocity`] by one step under gravity.
+/// The schedule a response plugin runs in: the collision plugin's ([`CollisionSchedule`]).
+///
+/// # Panics
+/// When the collision plugin was not added first, or `given` is another schedule: the
+/// response's systems would run unordered with the pipeline (a set of the same name in a
+/// schedule the pipeline is not in), a mistake better seen at startup than as contacts that
+/// are never resolved.
+fn response_schedule(
+    app: &App,
+    given: Option<Interned<dyn ScheduleLabel>>,
+    plugin: &str,
+) -> Interned<dyn ScheduleLabel> {
+    let Some(collision) = app.world().get_resource::<CollisionSchedule>() else {
+        panic!("{plugin}: add StochasticCollisionPlugin before it (it runs in that schedule)");
+    };
+    match given {
+        Some(s) if s != collision.0 => panic!(
+            "{plugin} in {s:?}, but StochasticCollisionPlugin runs in {:?}: use \
+             {plugin}::default(), which takes the collision plugin's schedule",
+            collision.0
+        ),
+        _ => collision.0,
+    }
+}
+
+/// Moves the awake bodies with [`Velocity`] by one step under gravity: their pose, and their
+/// `Transform` when they have one (what the game draws, and where the next run reads the
+/// pose).
 pub fn integrate_velocities(
     settings: Res<ImpulseSettings>,
-    mut q: Query<(&mut Velocity, &mut ColliderPose, &Rest)>,
+    time: Option<Res<Time>>,
+    mut q: Query<(&mut Velocity, &mut ColliderPose, &Rest, Placement)>,
+    parents: Parents,
 ) {
-    let dt = settings.dt;
+    let dt = settings.step(time.as_deref());
     let keep = (1.0 - settings.damping * dt).clamp(0.0, 1.0);
-    for (mut v, mut pose, rest) in &mut q {
+    for (mut v, mut pose, rest, mut placement) in &mut q {
         if rest.asleep {
             continue;
         }
         v.0 = (v.0 + settings.gravity * dt) * keep;
-        pose.0.translation += v.0 * dt;
+        shift(&mut pose, &mut placement, &parents, v.0 * dt);
     }
 }
 
@@ -208,6 +267,7 @@ pub fn impulse_response(
     mut queue: ResMut<ContactQueue>,
     mut bodies: Query<BodyData>,
     deformables: Query<(), With<Deformable>>,
+    parents: Parents,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
     let start = Instant::now();
@@ -216,7 +276,7 @@ pub fn impulse_response(
             return false;
         }
         if let Ok([a, b]) = bodies.get_many_mut([c.a, c.b]) {
-            resolve(&settings, c, a, b);
+            resolve(&settings, c, a, b, &parents);
         }
         true
     });
@@ -229,14 +289,10 @@ type BodyData = (
     Option<&'static mut Velocity>,
     Option<&'static Mass>,
     Option<&'static mut Rest>,
+    Placement,
 );
 
-type Body<'a> = (
-    Mut<'a, ColliderPose>,
-    Option<Mut<'a, Velocity>>,
-    Option<&'a Mass>,
-    Option<Mut<'a, Rest>>,
-);
+type Body<'a> = QueryItem<'a, 'a, BodyData>;
 
 /// Inverse mass; 0 for static and sleeping bodies.
 fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>, rest: &Option<Mut<Rest>>) -> f32 {
@@ -263,10 +319,16 @@ fn wake_if_hit<'w>(s: &ImpulseSettings, c: &Contact, a: &mut Body<'w>, b: &mut B
     }
 }
 
-fn resolve<'w>(s: &ImpulseSettings, c: &Contact, mut a: Body<'w>, mut b: Body<'w>) {
+fn resolve<'w>(
+    s: &ImpulseSettings,
+    c: &Contact,
+    mut a: Body<'w>,
+    mut b: Body<'w>,
+    parents: &Parents,
+) {
     wake_if_hit(s, c, &mut a, &mut b);
-    let (mut pa, mut va, ma, ra) = a;
-    let (mut pb, mut vb, mb, rb) = b;
+    let (mut pa, mut va, ma, ra, mut place_a) = a;
+    let (mut pb, mut vb, mb, rb, mut place_b) = b;
     let (ia, ib) = (inverse_mass(&va, ma, &ra), inverse_mass(&vb, mb, &rb));
     let inv = ia + ib;
     if inv == 0.0 || !c.normal.is_finite() || c.normal == Vec3::ZERO {
@@ -292,10 +354,10 @@ fn resolve<'w>(s: &ImpulseSettings, c: &Contact, mut a: Body<'w>, mut b: Body<'w
     let push = (c.depth - s.slop).max(0.0) * s.correction / inv;
     if push > 0.0 {
         if ia > 0.0 {
-            pa.0.translation -= n * push * ia;
+            shift(&mut pa, &mut place_a, parents, -n * push * ia);
         }
         if ib > 0.0 {
-            pb.0.translation += n * push * ib;
+            shift(&mut pb, &mut place_b, parents, n * push * ib);
         }
     }
 }
@@ -319,29 +381,39 @@ impl Default for PenaltySettings {
 }
 
 /// Penalty response for deformable meshes (see [`ContactQueue`]).
+#[derive(Default)]
 pub struct PenaltyResponsePlugin {
-    /// The schedule of the collision plugin.
-    pub schedule: Interned<dyn ScheduleLabel>,
+    /// The schedule of the collision plugin (`None`, the default: the schedule the
+    /// [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin) was added to).
+    pub schedule: Option<Interned<dyn ScheduleLabel>>,
     /// Initial settings.
     pub settings: PenaltySettings,
 }
 
 impl PenaltyResponsePlugin {
-    /// The response in `schedule` with default settings.
+    /// The response in `schedule` with default settings (it must be the collision
+    /// plugin's; [`Default`] takes it from the collision plugin).
     pub fn in_schedule(schedule: impl ScheduleLabel) -> Self {
         Self {
-            schedule: schedule.intern(),
+            schedule: Some(schedule.intern()),
             settings: PenaltySettings::default(),
         }
+    }
+
+    /// With these settings.
+    pub fn with_settings(mut self, settings: PenaltySettings) -> Self {
+        self.settings = settings;
+        self
     }
 }
 
 impl Plugin for PenaltyResponsePlugin {
     fn build(&self, app: &mut App) {
+        let schedule = response_schedule(app, self.schedule, "PenaltyResponsePlugin");
         app.insert_resource(self.settings)
             .init_resource::<ContactQueue>()
             .add_systems(
-                self.schedule,
+                schedule,
                 penalty_response.in_set(CollisionSystems::Response),
             );
         app.world_mut().resource_mut::<ContactQueue>().enable();
@@ -352,7 +424,7 @@ impl Plugin for PenaltyResponsePlugin {
 pub fn penalty_response(
     settings: Res<PenaltySettings>,
     mut queue: ResMut<ContactQueue>,
-    mut meshes: Query<(&mut Deformable, &ColliderPose)>,
+    mut meshes: Query<(&mut Deformable, &ColliderPose, Option<&ColliderScale>)>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
     let start = Instant::now();
@@ -368,8 +440,10 @@ pub fn penalty_response(
         // Both sides move half if both are deformable (or it is a self-contact).
         let share = if da && db { 0.5 } else { 1.0 };
         for (entity, tri, sign) in [(c.a, tris.a, -1.0f32), (c.b, tris.b, 1.0)] {
-            if let Ok((mut mesh, pose)) = meshes.get_mut(entity) {
-                let local = pose.0.rotation.inverse() * (c.normal * (sign * step * share));
+            if let Ok((mut mesh, pose, scale)) = meshes.get_mut(entity) {
+                // World displacement to the mesh's unscaled local frame.
+                let scale = scale.map_or(Vec3::ONE, |s| s.0);
+                let local = pose.0.rotation.inverse() * (c.normal * (sign * step * share)) / scale;
                 let t = mesh.mesh.mesh().triangles()[tri as usize];
                 let p = mesh.positions_mut();
                 for v in t {

@@ -1,5 +1,7 @@
 //! The public, chained system sets of the collision pipeline.
+use bevy_ecs::intern::Interned;
 use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleLabel;
 
 /// The stages of one run of the collision pipeline, chained in this order in the plugin's
 /// schedule. Order your systems around them, for example a game's reaction
@@ -11,8 +13,9 @@ use bevy_ecs::prelude::*;
 /// idle stages as not run.
 #[derive(SystemSet, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum CollisionSystems {
-    /// Poses from `GlobalTransform` or [`ColliderPose`](super::ColliderPose), refit of
-    /// deformed meshes, validation, world boxes.
+    /// Poses and scales from `Transform` (composed with the ancestors'), `GlobalTransform`
+    /// or [`ColliderPose`](super::ColliderPose) and [`ColliderScale`](super::ColliderScale),
+    /// refit of deformed meshes, validation, world boxes.
     Prepare,
     /// Pairs created and removed where colliders left their broad-phase boxes (sweep and
     /// prune), filtered by layers.
@@ -27,3 +30,8 @@ pub enum CollisionSystems {
     /// Responses consuming the contact queue (built-in plugins or your own systems).
     Response,
 }
+
+/// The schedule the [`StochasticCollisionPlugin`](super::StochasticCollisionPlugin) runs in
+/// (a resource it inserts; the response plugins read it).
+#[derive(Resource, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CollisionSchedule(pub Interned<dyn ScheduleLabel>);

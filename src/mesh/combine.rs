@@ -1,4 +1,5 @@
-//! Building a mesh from others: a translated copy, and the union of several meshes' triangles.
+//! Building a mesh from others: a translated or scaled copy, and the union of several meshes'
+//! triangles.
 use glam::Vec3;
 
 use super::{MeshError, TriMesh};
@@ -22,6 +23,43 @@ impl TriMesh {
     pub fn translated(&self, offset: Vec3) -> Result<TriMesh, MeshError> {
         let positions = self.positions().iter().map(|&p| p + offset).collect();
         TriMesh::new(positions, self.triangles().to_vec())
+    }
+
+    /// A copy with every vertex scaled by `scale` along the axes (non-uniform scale allowed).
+    /// A negative product of the factors mirrors the mesh: each triangle's vertex order is
+    /// reversed, so triangles keep facing outwards.
+    ///
+    /// # Errors
+    /// [`MeshError::InvalidScale`] when a factor is zero, not finite, or so small that the
+    /// mesh would collapse (below `1e-6` in magnitude); [`MeshError::NonFinite`] if a scaled
+    /// coordinate overflows `f32`.
+    ///
+    /// # Example
+    /// ```
+    /// use glam::Vec3;
+    /// use stochastic_collision::mesh::generate;
+    /// let cube = generate::cuboid(Vec3::ONE, 0);
+    /// let slab = cube.scaled(Vec3::new(2.0, 0.5, 1.0))?;
+    /// assert_eq!(slab.aabb().max, Vec3::new(2.0, 0.5, 1.0));
+    /// let mirrored = cube.scaled(Vec3::new(-1.0, 1.0, 1.0))?;
+    /// let [a, b, c] = cube.triangles()[0];
+    /// assert_eq!(mirrored.triangles()[0], [a, c, b], "still facing outwards");
+    /// # Ok::<(), stochastic_collision::mesh::MeshError>(())
+    /// ```
+    pub fn scaled(&self, scale: Vec3) -> Result<TriMesh, MeshError> {
+        if !scale.is_finite() || scale.abs().min_element() < 1e-6 {
+            return Err(MeshError::InvalidScale {
+                scale: scale.to_array(),
+            });
+        }
+        let positions = self.positions().iter().map(|&p| p * scale).collect();
+        let mirrored = scale.x * scale.y * scale.z < 0.0;
+        let triangles = self
+            .triangles()
+            .iter()
+            .map(|&[a, b, c]| if mirrored { [a, c, b] } else { [a, b, c] })
+            .collect();
+        TriMesh::new(positions, triangles)
     }
 
     /// One mesh holding every part's vertices and triangles, in order (no welding: vertices
@@ -87,5 +125,55 @@ mod tests {
             a.translated(Vec3::new(f32::NAN, 0.0, 0.0)),
             Err(MeshError::NonFinite { vertex: 0, .. })
         ));
+    }
+
+    /// Six times the enclosed volume, positive when the triangles face outwards.
+    fn signed_volume(m: &TriMesh) -> f32 {
+        m.triangles()
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|v| m.positions()[v as usize]);
+                a.dot(b.cross(c))
+            })
+            .sum()
+    }
+
+    #[test]
+    fn scaling_scales_the_volume_and_keeps_triangles_facing_outwards() {
+        let ball = generate::icosphere(1.0, 2);
+        let v = signed_volume(&ball);
+        assert!(v > 0.0);
+        for s in [
+            Vec3::splat(2.0),
+            Vec3::new(0.5, 3.0, 1.0),
+            Vec3::new(-1.0, 1.0, 1.0),
+            Vec3::new(-2.0, -1.0, 0.5),
+            Vec3::splat(-1.0),
+        ] {
+            let scaled = ball.scaled(s).unwrap();
+            let expected = v * (s.x * s.y * s.z).abs();
+            let got = signed_volume(&scaled);
+            assert!(
+                (got - expected).abs() < 1e-4 * expected,
+                "{s}: {got} vs {expected}"
+            );
+        }
+    }
+
+    #[test]
+    fn degenerate_scales_are_errors() {
+        let ball = generate::icosphere(1.0, 0);
+        for s in [
+            Vec3::ZERO,
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(1.0, f32::NAN, 1.0),
+            Vec3::splat(f32::INFINITY),
+            Vec3::splat(1e-7),
+        ] {
+            assert!(
+                matches!(ball.scaled(s), Err(MeshError::InvalidScale { .. })),
+                "{s}"
+            );
+        }
     }
 }

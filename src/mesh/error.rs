@@ -47,6 +47,13 @@ pub enum MeshError {
         /// The number of positions given.
         got: usize,
     },
+    /// A scale factor is zero, not finite, or below `1e-6` in magnitude (the mesh would
+    /// collapse).
+    #[error("invalid scale {scale:?}: every factor must be finite and at least 1e-6 in magnitude")]
+    InvalidScale {
+        /// The scale given.
+        scale: [f32; 3],
+    },
     /// The file could not be read.
     #[error("cannot read {path}: {message}")]
     Io {

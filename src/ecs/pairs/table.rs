@@ -63,11 +63,15 @@ pub(crate) struct PairHot {
 }
 
 /// A pair whose touching state flipped in this run (or that was removed while touching).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Transition {
     pub a: Entity,
     pub b: Entity,
     pub started: bool,
+    /// How the answer that flipped it was found, and its probability that the pair collides
+    /// (a removed pair: [`Method::Bounds`], 0).
+    pub method: Method,
+    pub probability: f64,
 }
 
 /// What a test (or an answer computed from memory) leaves for later runs.
@@ -231,6 +235,8 @@ impl PairTable {
                 a: s.a,
                 b: s.b,
                 started: false,
+                method: Method::Bounds,
+                probability: 0.0,
             });
         }
         self.live -= 1;
@@ -341,6 +347,8 @@ impl PairTable {
                 a: s.a,
                 b: s.b,
                 started: collides,
+                method: s.outcome.method,
+                probability: s.outcome.probability,
             });
         }
         if collides {

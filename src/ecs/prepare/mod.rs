@@ -1,6 +1,9 @@
 //! Prepare stage: poses, refit of deformed meshes, validation, world boxes, kept in the
 //! [`ColliderTable`] from run to run and updated only where the ECS says something changed.
 mod colliders;
+mod scaled;
+#[cfg(feature = "transform")]
+mod transforms;
 mod world_box;
 
 use std::sync::{Arc, LazyLock};
@@ -13,11 +16,28 @@ use bevy_ecs::system::SystemParam;
 use glam::Vec3;
 
 pub use colliders::{ColliderEntry, ColliderTable, Geometry};
+use scaled::ScaledTrees;
+#[cfg(feature = "transform")]
+pub use transforms::sync_transforms;
+#[cfg(feature = "transform")]
+pub(crate) use transforms::{Parents, Placement, shift};
+
+/// Without bevy_transform, bodies move through their pose alone.
+#[cfg(not(feature = "transform"))]
+pub(crate) type Placement = ();
+#[cfg(not(feature = "transform"))]
+pub(crate) type Parents<'w, 's> = ();
+
+/// Moves a body by `delta` (world space).
+#[cfg(not(feature = "transform"))]
+pub(crate) fn shift(pose: &mut ColliderPose, _: &mut (), _: &Parents, delta: Vec3) {
+    pose.0.translation += delta;
+}
 use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;
 
 use super::components::{
-    Collider, ColliderPose, CollisionLayers, Deformable, Fidelity, SelfCollision,
+    Collider, ColliderPose, ColliderScale, CollisionLayers, Deformable, Fidelity, SelfCollision,
 };
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
@@ -27,10 +47,12 @@ use crate::bvh::CollisionMesh;
 use crate::geometry::Pose;
 use crate::mesh::{MeshError, TriMesh};
 
-/// What Prepare remembers between runs: the entities reported invalid (reported once).
+/// What Prepare remembers between runs: the entities reported invalid (reported once), the
+/// scaled trees in use.
 #[derive(Resource, Debug, Default)]
 pub struct PrepareState {
     invalid: EntityHashSet,
+    scaled: ScaledTrees,
 }
 
 /// Entities that lost one of the components a collider is made of (or were despawned) since
@@ -45,6 +67,7 @@ pub struct RemovedColliders {
 /// The components whose removal changes or removes a collider.
 type ColliderParts = (
     Collider,
+    ColliderScale,
     Deformable,
     Fidelity,
     CollisionLayers,
@@ -57,26 +80,21 @@ pub fn note_removed(removed: On<Remove<ColliderParts>>, mut list: ResMut<Removed
     list.entities.push(removed.entity);
 }
 
-/// Run condition: some deformable mesh has new positions.
-pub fn any_stale(q: Query<&Deformable>) -> bool {
-    q.iter().any(|d| d.stale)
+/// Whether a deformable mesh needs a refit: new positions, or a new (valid) scale.
+fn needs_refit(d: &Deformable, scale: Option<&ColliderScale>) -> bool {
+    let scale = deformable_scale(scale);
+    d.stale || scale.is_some_and(|s| s != d.scale_applied)
 }
 
-/// Copies `GlobalTransform` into [`ColliderPose`] (rotation and translation) where it changed.
-#[cfg(feature = "transform")]
-pub fn sync_global_transforms(
-    mut q: Query<
-        (
-            &bevy_transform::components::GlobalTransform,
-            &mut ColliderPose,
-        ),
-        Changed<bevy_transform::components::GlobalTransform>,
-    >,
-) {
-    for (gt, mut pose) in &mut q {
-        let (_, rotation, translation) = gt.to_scale_rotation_translation();
-        pose.set_if_neq(ColliderPose(Pose::new(translation, rotation)));
-    }
+/// The scale a deformable mesh is refitted at (`None`: invalid, reported by the update).
+fn deformable_scale(scale: Option<&ColliderScale>) -> Option<Vec3> {
+    let scale = scale.copied().unwrap_or_default();
+    (scale.is_valid() && scale.0.min_element() > 0.0).then_some(scale.0)
+}
+
+/// Run condition: some deformable mesh has new positions (or a new scale).
+pub fn any_stale(q: Query<(&Deformable, Option<&ColliderScale>)>) -> bool {
+    q.iter().any(|(d, scale)| needs_refit(d, scale))
 }
 
 /// A mesh the table holds for a deformable collider while its own is refitted in place.
@@ -88,7 +106,7 @@ static REFITTING: LazyLock<Arc<CollisionMesh>> = LazyLock::new(|| {
 
 /// Refits the BVHs of deformable meshes whose positions changed, in parallel.
 pub fn refit_deformables(
-    mut q: Query<(Entity, &mut Deformable)>,
+    mut q: Query<(Entity, &mut Deformable, Option<&ColliderScale>)>,
     mut table: ResMut<ColliderTable>,
     pool: Res<CollisionTaskPool>,
     mut diag: ResMut<CollisionDiagnostics>,
@@ -97,25 +115,36 @@ pub fn refit_deformables(
     begin_frame(&mut diag);
     diag.begun_by_refit = true;
     let start = Instant::now();
-    let mut stale: Vec<(Entity, Mut<Deformable>, Option<MeshError>)> = q
+    let mut stale: Vec<(Entity, Mut<Deformable>, Vec3, Option<MeshError>)> = q
         .iter_mut()
-        .filter(|(_, d)| d.stale)
-        .map(|(e, d)| (e, d, None))
+        .filter(|(_, d, scale)| needs_refit(d, *scale))
+        .map(|(e, d, scale)| {
+            let scale = deformable_scale(scale).unwrap_or(d.scale_applied);
+            (e, d, scale, None)
+        })
         .collect();
     // The table's share of each mesh is let go first, so the refit happens in place (the
     // update after this puts the refitted mesh back).
-    for (entity, _, _) in &stale {
+    for (entity, _, _, _) in &stale {
         if let Some(i) = table.slot_of(*entity) {
             table.entry_mut(i).geometry = Geometry::Deformable(REFITTING.clone());
         }
     }
     let chunk = pool.chunk_size(stale.len(), 1);
-    pool.for_each_mut(&mut stale, chunk, |(_, d, err)| {
+    pool.for_each_mut(&mut stale, chunk, |(_, d, scale, err)| {
         let d = &mut **d;
         d.stale = false;
-        *err = Arc::make_mut(&mut d.mesh).set_positions(&d.positions).err();
+        d.scale_applied = *scale;
+        let positions = if *scale == Vec3::ONE {
+            &d.positions
+        } else {
+            d.scaled.clear();
+            d.scaled.extend(d.positions.iter().map(|&p| p * *scale));
+            &d.scaled
+        };
+        *err = Arc::make_mut(&mut d.mesh).set_positions(positions).err();
     });
-    for (_, d, err) in &mut stale {
+    for (_, d, _, err) in &mut stale {
         d.broken = err.take();
     }
     diag.record(Stage::Refit, start.elapsed(), stale.len() as u64);
@@ -125,6 +154,7 @@ pub fn refit_deformables(
 type ColliderData<'a> = (
     Entity,
     &'a ColliderPose,
+    Option<&'a ColliderScale>,
     Option<&'a Collider>,
     Option<&'a Deformable>,
     Option<&'a Fidelity>,
@@ -139,6 +169,7 @@ type IsCollider = Or<(With<Collider>, With<Deformable>)>;
 
 type AnyChange = Or<(
     Changed<ColliderPose>,
+    Changed<ColliderScale>,
     Changed<Collider>,
     Changed<Deformable>,
     Changed<Fidelity>,
@@ -172,9 +203,11 @@ pub fn update_colliders(
     let run = diag.frame;
     table.begin_run(run);
     let full = config.is_changed();
+    let state = &mut *state;
     let mut update = Update {
         table: &mut table,
         invalid: &mut state.invalid,
+        scaled: &mut state.scaled,
         errors: &mut errors,
         config: &config,
         run,
@@ -214,6 +247,7 @@ pub fn update_colliders(
 struct Update<'a, 'w> {
     table: &'a mut ColliderTable,
     invalid: &'a mut EntityHashSet,
+    scaled: &'a mut ScaledTrees,
     errors: &'a mut MessageWriter<'w, CollisionError>,
     config: &'a CollisionConfig,
     run: u64,
@@ -224,18 +258,34 @@ struct Update<'a, 'w> {
 impl Update<'_, '_> {
     /// Updates the collider of one entity from its components.
     fn entry(&mut self, data: ColliderItem) {
-        let (entity, pose, collider, deformable, fidelity, layers, self_marker) = data;
+        let (entity, pose, scale, collider, deformable, fidelity, layers, self_marker) = data;
+        let scale = scale.copied().unwrap_or_default();
+        let scale_problem = || CollisionErrorKind::InvalidScale {
+            scale: scale.0.to_array(),
+        };
         let (geometry, default_fidelity, problem) = match (deformable, collider) {
             (Some(d), _) => (
                 Geometry::Deformable(d.mesh.clone()),
                 Fidelity::Exact,
-                d.broken.clone().map(CollisionErrorKind::Mesh),
+                if deformable_scale(Some(&scale)).is_none() {
+                    Some(scale_problem())
+                } else {
+                    d.broken.clone().map(CollisionErrorKind::Mesh)
+                },
             ),
-            (None, Some(c)) => (
+            (None, Some(c)) if !scale.is_valid() => (
                 Geometry::Rigid(c.tree().clone()),
                 self.config.default_fidelity,
-                None,
+                Some(scale_problem()),
             ),
+            (None, Some(c)) => match self.scaled.tree(c.tree(), scale.0) {
+                Ok(tree) => (Geometry::Rigid(tree), self.config.default_fidelity, None),
+                Err(e) => (
+                    Geometry::Rigid(c.tree().clone()),
+                    self.config.default_fidelity,
+                    Some(CollisionErrorKind::Mesh(e)),
+                ),
+            },
             (None, None) => {
                 self.table.remove(entity);
                 return;
