@@ -39,7 +39,7 @@ fn main() {
         .iter(world)
         .filter(|r| r.is_asleep())
         .count();
-    let mut q = world.query_filtered::<&ColliderPose, With<Velocity>>();
+    let mut q = world.query_filtered::<&ColliderPose, With<BodyVelocity>>();
     let (inside, below) = q.iter(world).fold((0, 0), |(i, b), p| {
         let y = p.0.translation.y;
         (

@@ -56,11 +56,11 @@ pub mod prelude {
         closest_points, intersecting_pairs, intersects, intersects_with, self_intersections,
     };
     pub use crate::ecs::{
-        Collider, ColliderPose, ColliderScale, CollidingEntities, CollisionConfig,
-        CollisionDiagnostics, CollisionEnded, CollisionError, CollisionEventsEnabled,
-        CollisionLayers, CollisionStarted, CollisionSystems, Collisions, Contact, ContactQueue,
-        Deformable, Fidelity, FrameBudget, ImpulseResponsePlugin, Mass, Method,
-        PenaltyResponsePlugin, SelfCollision, StochasticCollisionPlugin, Velocity,
+        BodyMass, BodyVelocity, ColliderPose, ColliderScale, CollisionConfig, CollisionDiagnostics,
+        CollisionEnded, CollisionError, CollisionPairs, CollisionSensor, CollisionStarted,
+        CollisionSystems, Contact, ContactLayers, ContactQueue, Deformable, Fidelity, FrameBudget,
+        ImpulseResponsePlugin, MeshCollider, Method, ObserveCollisions, PenaltyResponsePlugin,
+        SelfCollision, StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
     };
     pub use crate::geometry::{Aabb, Pose};
     pub use crate::mesh::{MeshError, Topology, TriMesh, generate};

@@ -13,7 +13,7 @@ use stochastic_collision::prelude::*;
 /// A cluster of overlapping detailed spheres: many ADB pairs that need work to settle.
 fn cluster(config: CollisionConfig) -> App {
     let mut app = app_with(config, 2);
-    let ball = Collider::new(generate::icosphere(1.0, 3));
+    let ball = MeshCollider::new(generate::icosphere(1.0, 3));
     for i in 0..5 {
         for j in 0..5 {
             let p = Vec3::new(i as f32 * 1.6, (i + j) as f32 * 0.1, j as f32 * 1.6);
@@ -101,7 +101,7 @@ fn level_geometry_holds_when_the_time_budget_is_spent() {
         budget: FrameBudget::Unlimited,
         ..Default::default()
     });
-    let slab = Collider::new(generate::cuboid(Vec3::new(5.0, 0.5, 5.0), 4));
+    let slab = MeshCollider::new(generate::cuboid(Vec3::new(5.0, 0.5, 5.0), 4));
     let floor = app
         .world_mut()
         .spawn((

@@ -26,7 +26,7 @@ fn run(threads: usize) -> (EventLog, Vec<[u32; 3]>) {
         app.update();
     }
     let world = app.world_mut();
-    let mut q = world.query_filtered::<(Entity, &ColliderPose), With<Velocity>>();
+    let mut q = world.query_filtered::<(Entity, &ColliderPose), With<BodyVelocity>>();
     let mut poses: Vec<_> = q.iter(world).map(|(e, p)| (e, p.0.translation)).collect();
     poses.sort_by_key(|(e, _)| *e);
     let poses = poses

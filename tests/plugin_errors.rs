@@ -33,8 +33,8 @@ fn nan_pose_reports_once_skips_the_entity_and_others_go_on() {
         CollisionErrorKind::InvalidPose { .. }
     ));
     assert_eq!(l.ended, vec![pair(c, d)]);
-    assert!(app.world().get::<CollidingEntities>(a).unwrap().contains(b));
-    assert!(!app.world().get::<CollidingEntities>(d).unwrap().contains(c));
+    assert!(app.world().get::<TouchingEntities>(a).unwrap().contains(b));
+    assert!(!app.world().get::<TouchingEntities>(d).unwrap().contains(c));
     // Fixed: collides again; broken again: a second error.
     app.world_mut()
         .get_mut::<ColliderPose>(c)
@@ -69,7 +69,7 @@ fn nan_global_transform_is_reported() {
         (ball, GlobalTransform::from_translation(Vec3::X * 1.5)),
     );
     app.update();
-    assert!(app.world().get::<CollidingEntities>(a).unwrap().contains(b));
+    assert!(app.world().get::<TouchingEntities>(a).unwrap().contains(b));
     *app.world_mut().get_mut::<GlobalTransform>(b).unwrap() =
         GlobalTransform::from_translation(Vec3::new(f32::INFINITY, 0.0, 0.0));
     app.update();
@@ -110,7 +110,7 @@ fn nan_vertex_of_a_deformable_is_reported_and_the_rest_goes_on() {
         CollisionErrorKind::Mesh(MeshError::NonFinite { vertex: 3, .. })
     ));
     assert_eq!(l.ended, vec![pair(cloth, rock)]);
-    assert!(app.world().get::<CollidingEntities>(a).unwrap().contains(b));
+    assert!(app.world().get::<TouchingEntities>(a).unwrap().contains(b));
     assert!(
         app.world()
             .get::<Deformable>(cloth)

@@ -1,4 +1,4 @@
-//! Collision events: once per contact interval, `CollidingEntities`, despawn, observers,
+//! Collision events: once per contact interval, `TouchingEntities`, despawn, observers,
 //! readers that run less often than the collision schedule.
 mod plugin_support;
 
@@ -30,8 +30,8 @@ fn started_and_ended_once_per_contact_interval() {
                 .translation
                 .x = *x;
             app.update();
-            let ca = app.world().get::<CollidingEntities>(a).unwrap();
-            let cb = app.world().get::<CollidingEntities>(b).unwrap();
+            let ca = app.world().get::<TouchingEntities>(a).unwrap();
+            let cb = app.world().get::<TouchingEntities>(b).unwrap();
             let expect = x.abs() < 1.9;
             if x.abs() > 2.1 || x.abs() < 1.9 {
                 assert_eq!(ca.contains(b), expect, "{fidelity:?} at x = {x}");
@@ -65,7 +65,7 @@ fn despawn_mid_contact_ends_the_contact() {
     let mut both = [b, c];
     both.sort();
     assert_eq!(
-        app.world().get::<CollidingEntities>(a).unwrap().entities(),
+        app.world().get::<TouchingEntities>(a).unwrap().entities(),
         &both[..]
     );
     app.world_mut().despawn(b);
@@ -75,7 +75,7 @@ fn despawn_mid_contact_ends_the_contact() {
     assert_eq!(log.started.len(), 2);
     assert_eq!(log.ended, vec![pair(a, b)]);
     assert_eq!(
-        app.world().get::<CollidingEntities>(a).unwrap().entities(),
+        app.world().get::<TouchingEntities>(a).unwrap().entities(),
         &[c][..]
     );
 }
@@ -86,19 +86,19 @@ fn layers_filter_pairs() {
     let ball = ball(1.0);
     let a = spawn(
         &mut app,
-        (ball.clone(), at(0.0, 0.0, 0.0), CollisionLayers::new(1, 2)),
+        (ball.clone(), at(0.0, 0.0, 0.0), ContactLayers::new(1, 2)),
     );
     let b = spawn(
         &mut app,
-        (ball.clone(), at(1.5, 0.0, 0.0), CollisionLayers::new(1, 2)),
+        (ball.clone(), at(1.5, 0.0, 0.0), ContactLayers::new(1, 2)),
     );
     let c = spawn(
         &mut app,
-        (ball, at(-1.5, 0.0, 0.0), CollisionLayers::new(2, 1)),
+        (ball, at(-1.5, 0.0, 0.0), ContactLayers::new(2, 1)),
     );
     app.update();
     assert_eq!(log(&app).started, vec![pair(a, c)]);
-    assert!(!app.world().get::<CollidingEntities>(b).unwrap().contains(a));
+    assert!(!app.world().get::<TouchingEntities>(b).unwrap().contains(a));
 }
 
 #[derive(Resource, Default)]
@@ -115,7 +115,7 @@ fn observers_fire_for_opted_in_entities_even_when_added_later() {
     // Opt in after spawning (avian#1066).
     app.world_mut()
         .entity_mut(b)
-        .insert(CollisionEventsEnabled)
+        .insert(ObserveCollisions)
         .observe(|e: On<CollisionStarted>, mut o: ResMut<Observed>| {
             o.0.push(("started", e.entity, e.other));
         })
@@ -214,7 +214,7 @@ fn contacts_are_read_through_collisions_and_sent_as_messages_only_on_request() {
     let b = spawn(&mut app, (ball, at(1.5, 0.0, 0.0)));
     let view = |app: &mut App| {
         app.world_mut()
-            .run_system_once(move |c: Collisions| {
+            .run_system_once(move |c: CollisionPairs| {
                 let p = c.get(b, a).expect("the pair exists");
                 let others: Vec<Entity> = c.touching_of(a).map(|p| p.other(a)).collect();
                 (
@@ -265,5 +265,5 @@ fn bounds_fidelity_collides_on_box_overlap() {
     let c = spawn(&mut app, (ball, at(-1.7, -1.7, 0.0), Fidelity::Exact));
     app.update();
     assert_eq!(log(&app).started, vec![pair(a, b)]);
-    assert!(!app.world().get::<CollidingEntities>(c).unwrap().contains(a));
+    assert!(!app.world().get::<TouchingEntities>(c).unwrap().contains(a));
 }

@@ -5,8 +5,8 @@
 //!   pair, once; every pair's broad-phase (fat) boxes overlap and its layers interact;
 //! - with exact fidelity and no budget, every pair touches exactly when the exact query says
 //!   the meshes intersect at the current poses, whether it was worked on in this run or kept
-//!   its answer from an earlier one, and `CollidingEntities` says the same;
-//! - `Collisions` finds each pair from both of its entities.
+//!   its answer from an earlier one, and `TouchingEntities` says the same;
+//! - `CollisionPairs` finds each pair from both of its entities.
 mod plugin_support;
 
 use std::collections::BTreeSet;
@@ -17,20 +17,20 @@ use bevy_ecs::system::RunSystemOnce;
 use plugin_support::*;
 use proptest::prelude::*;
 use stochastic_collision::bvh::{QueryWorkspace, intersects};
-use stochastic_collision::ecs::{BroadPhaseState, ColliderTable, CollisionLayers, PairTable};
+use stochastic_collision::ecs::{BroadPhaseState, ColliderTable, ContactLayers, PairTable};
 use stochastic_collision::prelude::*;
 
-const LAYERS: [CollisionLayers; 3] = [
-    CollisionLayers::ALL,
-    CollisionLayers::new(0b01, 0b01),
-    CollisionLayers::new(0b10, 0b11),
+const LAYERS: [ContactLayers; 3] = [
+    ContactLayers::ALL,
+    ContactLayers::new(0b01, 0b01),
+    ContactLayers::new(0b10, 0b11),
 ];
 
-fn shapes() -> [Collider; 3] {
+fn shapes() -> [MeshCollider; 3] {
     [
-        Collider::new(generate::icosphere(0.5, 1)),
-        Collider::new(generate::cuboid(Vec3::new(1.5, 0.1, 0.2), 1)),
-        Collider::new(generate::torus(0.6, 0.15, 12, 6)),
+        MeshCollider::new(generate::icosphere(0.5, 1)),
+        MeshCollider::new(generate::cuboid(Vec3::new(1.5, 0.1, 0.2), 1)),
+        MeshCollider::new(generate::torus(0.6, 0.15, 12, 6)),
     ]
 }
 
@@ -71,7 +71,7 @@ fn change() -> impl Strategy<Value = Change> {
     ]
 }
 
-fn apply(app: &mut App, bodies: &mut Vec<Entity>, shapes: &[Collider; 3], c: &Change) {
+fn apply(app: &mut App, bodies: &mut Vec<Entity>, shapes: &[MeshCollider; 3], c: &Change) {
     let world = app.world_mut();
     match *c {
         Change::Spawn {
@@ -140,7 +140,7 @@ fn check(app: &mut App, bodies: &[Entity], ws: &mut QueryWorkspace) -> Result<()
                 prop_assert!(listed.contains(&key), "pair {key:?} missing");
             }
             let touching =
-                listed.contains(&key) && world.get::<CollidingEntities>(a).unwrap().contains(b);
+                listed.contains(&key) && world.get::<TouchingEntities>(a).unwrap().contains(b);
             let exact = close
                 && intersects(
                     ea.geometry.mesh(),
@@ -150,17 +150,14 @@ fn check(app: &mut App, bodies: &[Entity], ws: &mut QueryWorkspace) -> Result<()
                     ws,
                 );
             prop_assert_eq!(touching, exact, "pair {:?}", key);
-            prop_assert_eq!(
-                world.get::<CollidingEntities>(b).unwrap().contains(a),
-                exact
-            );
+            prop_assert_eq!(world.get::<TouchingEntities>(b).unwrap().contains(a), exact);
         }
     }
-    // Collisions, as a system would read it: each pair from both ends.
+    // CollisionPairs, as a system would read it: each pair from both ends.
     let pairs: Vec<(Entity, Entity)> = listed.iter().copied().collect();
     let found = app
         .world_mut()
-        .run_system_once(move |c: Collisions| {
+        .run_system_once(move |c: CollisionPairs| {
             pairs.iter().all(|&(a, b)| {
                 c.get(a, b).is_some()
                     && c.get(b, a).is_some()

@@ -16,17 +16,17 @@ fn readme_example_runs() {
         .add_plugins(ImpulseResponsePlugin::default())
         .init_resource::<Seen>()
         .add_systems(FixedPostUpdate, on_hit.after(CollisionSystems::Report));
-    let floor = Collider::new(generate::cuboid(Vec3::new(50.0, 0.5, 2.0), 16));
+    let floor = MeshCollider::new(generate::cuboid(Vec3::new(50.0, 0.5, 2.0), 16));
     app.world_mut()
         .spawn((floor, Transform::from_xyz(0.0, -0.5, 0.0), Fidelity::Exact));
-    let rock = Collider::new(generate::icosphere(0.5, 2));
+    let rock = MeshCollider::new(generate::icosphere(0.5, 2));
     let rocks: Vec<Entity> = (0..20)
         .map(|i| {
             app.world_mut()
                 .spawn((
                     rock.clone(),
                     Transform::from_xyz(i as f32 * 0.9, 3.0, 0.0).with_scale(Vec3::splat(0.8)),
-                    Velocity(Vec3::ZERO),
+                    BodyVelocity(Vec3::ZERO),
                     Fidelity::Adb { p_min: 0.9 },
                 ))
                 .id()
@@ -49,7 +49,7 @@ fn readme_example_runs() {
 
 fn on_hit(
     mut started: MessageReader<CollisionStarted>,
-    collisions: Collisions,
+    collisions: CollisionPairs,
     mut seen: ResMut<Seen>,
 ) {
     for e in started.read() {

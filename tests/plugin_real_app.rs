@@ -8,6 +8,7 @@ mod plugin_support;
 
 use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
+use bevy_ecs::schedule::ScheduleLabel;
 use bevy_time::{TimePlugin, TimeUpdateStrategy};
 use bevy_transform::TransformPlugin;
 use bevy_transform::components::{GlobalTransform, Transform};
@@ -37,7 +38,7 @@ fn placed(x: f32, y: f32, z: f32) -> Transform {
 }
 
 fn touching(app: &App, a: Entity, b: Entity) -> bool {
-    app.world().get::<CollidingEntities>(a).unwrap().contains(b)
+    app.world().get::<TouchingEntities>(a).unwrap().contains(b)
 }
 
 fn steps(app: &mut App, n: usize) {
@@ -149,7 +150,7 @@ fn a_collider_spawned_in_the_fixed_step_is_tested_where_it_was_placed() {
         );
         assert!(
             app.world()
-                .get::<CollidingEntities>(origin)
+                .get::<TouchingEntities>(origin)
                 .unwrap()
                 .is_empty()
         );
@@ -194,27 +195,33 @@ fn a_child_collider_follows_its_parent_in_the_same_step() {
     assert_eq!(log(&app).started, vec![pair(other, child)]);
 }
 
+/// A floor (top at y = 0) and a ball of radius 0.25 at rest 1 above it, with a velocity;
+/// returns the ball.
+fn floor_and_falling_ball(app: &mut App) -> Entity {
+    let floor = MeshCollider::new(generate::cuboid(Vec3::new(3.0, 0.5, 3.0), 8));
+    spawn(app, (floor, placed(0.0, -0.5, 0.0), Fidelity::Exact));
+    spawn(
+        app,
+        (
+            ball(0.25),
+            placed(0.0, 1.0, 0.0),
+            BodyVelocity(Vec3::ZERO),
+            Fidelity::Exact,
+        ),
+    )
+}
+
 #[test]
 fn responses_move_the_transform_with_the_fixed_time_step() {
     let mut app = game();
     app.add_plugins(ImpulseResponsePlugin::default());
-    let floor = Collider::new(generate::cuboid(Vec3::new(3.0, 0.5, 3.0), 8));
-    spawn(&mut app, (floor, placed(0.0, -0.5, 0.0), Fidelity::Exact));
-    let ball = spawn(
-        &mut app,
-        (
-            ball(0.25),
-            placed(0.0, 1.0, 0.0),
-            Velocity(Vec3::ZERO),
-            Fidelity::Exact,
-        ),
-    );
+    let ball = floor_and_falling_ball(&mut app);
     // The first update starts the clock (no fixed step yet); then one step per update.
     steps(&mut app, 2);
     let settings = *app
         .world()
         .resource::<stochastic_collision::ecs::ImpulseSettings>();
-    let v = app.world().get::<Velocity>(ball).unwrap().0;
+    let v = app.world().get::<BodyVelocity>(ball).unwrap().0;
     let dt = DEFAULT_STEP;
     let expected = settings.gravity.y * dt * (1.0 - settings.damping * dt);
     assert!(
@@ -323,4 +330,65 @@ fn a_response_plugin_in_another_schedule_is_refused_at_startup() {
             PenaltyResponsePlugin::default(),
         ));
     app.update();
+}
+
+#[test]
+fn a_sensor_reports_contacts_and_nothing_responds_to_them() {
+    let mut app = game();
+    app.add_plugins(ImpulseResponsePlugin::default());
+    // Thinner than the ball: one contact interval from entering to leaving (exact contact
+    // is contact of surfaces, so a ball wholly inside a thick slab would not touch it).
+    let slab = MeshCollider::new(generate::cuboid(Vec3::new(3.0, 0.1, 3.0), 8));
+    let trigger = spawn(
+        &mut app,
+        (
+            slab,
+            placed(0.0, -0.1, 0.0),
+            Fidelity::Exact,
+            CollisionSensor,
+        ),
+    );
+    let ball = spawn(
+        &mut app,
+        (
+            ball(0.25),
+            placed(0.0, 1.0, 0.0),
+            BodyVelocity(Vec3::ZERO),
+            Fidelity::Exact,
+        ),
+    );
+    steps(&mut app, 90);
+    // It fell into the trigger volume and through it: reported, never pushed back.
+    assert_eq!(log(&app).started, vec![pair(trigger, ball)]);
+    let y = app.world().get::<Transform>(ball).unwrap().translation.y;
+    assert!(y < -1.5, "fell through the sensor: {y}");
+    assert!(app.world().resource::<ContactQueue>().is_empty());
+}
+
+#[test]
+fn the_plugin_group_adds_the_pipeline_and_both_responses_in_its_schedule() {
+    let mut app = App::new();
+    app.add_plugins((
+        TimePlugin,
+        TransformPlugin,
+        StochasticCollisionPlugins::default(),
+    ))
+    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1));
+    let ball = floor_and_falling_ball(&mut app);
+    steps(&mut app, 120);
+    let y = app.world().get::<Transform>(ball).unwrap().translation.y;
+    assert!(
+        y > 0.15 && y < 0.35,
+        "fell in FixedPostUpdate and rests on the floor: {y}"
+    );
+    assert!(
+        app.world()
+            .contains_resource::<stochastic_collision::ecs::PenaltySettings>()
+    );
+    assert_eq!(
+        app.world()
+            .resource::<stochastic_collision::ecs::CollisionSchedule>()
+            .0,
+        FixedPostUpdate.intern()
+    );
 }

@@ -139,7 +139,7 @@ fn swapping_a_collider_mid_contact_ends_and_restarts_consistently() {
             app.update();
         }
         assert_eq!(log(&app).ended, vec![pair(a, b)], "{fidelity:?}");
-        assert!(!app.world().get::<CollidingEntities>(a).unwrap().contains(b));
+        assert!(!app.world().get::<TouchingEntities>(a).unwrap().contains(b));
         // A larger one reaches it again: started again, once.
         app.world_mut().entity_mut(b).insert(ball(1.0));
         for _ in 0..3 {
@@ -221,7 +221,7 @@ fn a_collider_swapped_at_rest_is_tested_again_not_answered_from_memory() {
         let small = generate::icosphere(0.2, 2);
         let offset = Vec3::new(-0.6, 0.75, 0.75);
         let moved: Vec<Vec3> = small.positions().iter().map(|&p| p + offset).collect();
-        Collider::new(TriMesh::new(moved, small.triangles().to_vec()).unwrap())
+        MeshCollider::new(TriMesh::new(moved, small.triangles().to_vec()).unwrap())
     };
     for fidelity in [Fidelity::Exact, Fidelity::Adb { p_min: 0.99 }] {
         let (mut app, a, b) = touching_balls(fidelity);

@@ -58,7 +58,7 @@ fn deformable_with_self_collision_runs_refit_and_self_pass() {
     let d = app.world().resource::<CollisionDiagnostics>();
     assert_eq!(d.stage(Stage::Refit).last, None);
     assert_eq!(d.stage(Stage::Refit).runs, 1);
-    assert!(app.world().get::<CollidingEntities>(e).unwrap().is_empty());
+    assert!(app.world().get::<TouchingEntities>(e).unwrap().is_empty());
 }
 
 #[test]

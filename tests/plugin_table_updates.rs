@@ -46,7 +46,7 @@ fn a_removal_in_a_frame_without_a_collision_run_is_not_lost() {
                 app.world_mut().despawn(b);
             }
             "collider" => {
-                app.world_mut().entity_mut(b).remove::<Collider>();
+                app.world_mut().entity_mut(b).remove::<MeshCollider>();
             }
             _ => {
                 app.world_mut().entity_mut(b).remove::<ColliderPose>();
@@ -66,7 +66,7 @@ fn a_removal_in_a_frame_without_a_collision_run_is_not_lost() {
         assert!(table.get(b).is_none(), "{what}: b left the table");
         assert_eq!(table.len(), 1, "{what}");
         assert!(app.world().resource::<PairTable>().is_empty(), "{what}");
-        let colliding = app.world().get::<CollidingEntities>(a).unwrap();
+        let colliding = app.world().get::<TouchingEntities>(a).unwrap();
         assert!(!colliding.contains(b), "{what}");
         // And it comes back when its parts do.
         if what != "despawn" {

@@ -34,14 +34,14 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
         .add_systems(PostUpdate, embed.in_set(CollisionSystems::Response));
     let world = app.world_mut();
     world.resource_mut::<ContactQueue>().enable();
-    let castle = CollisionLayers::new(0b10, 0b01);
-    let balls = CollisionLayers::new(0b01, 0b10);
+    let castle = ContactLayers::new(0b10, 0b01);
+    let balls = ContactLayers::new(0b01, 0b10);
     world.spawn((
-        Collider::new(generate::cuboid(Vec3::new(0.5, 3.0, 8.0), 15)),
+        MeshCollider::new(generate::cuboid(Vec3::new(0.5, 3.0, 8.0), 15)),
         ColliderPose::from_translation(Vec3::new(0.0, 3.0, 0.0)),
         castle,
     ));
-    let merlon = Collider::new(generate::cuboid(Vec3::new(0.5, 0.4, 0.5), 3));
+    let merlon = MeshCollider::new(generate::cuboid(Vec3::new(0.5, 0.4, 0.5), 3));
     for k in 0..8 {
         world.spawn((
             merlon.clone(),
@@ -49,7 +49,7 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
             castle,
         ));
     }
-    let ball = Collider::new(generate::icosphere(0.15, 2));
+    let ball = MeshCollider::new(generate::icosphere(0.15, 2));
     let fidelity = fidelity.unwrap_or(Fidelity::Adb { p_min: 0.5 });
     if let Fidelity::Adb { .. } = fidelity {
         // A quick plausibility answer: few pieces of evidence, no exact triangle tests.
@@ -81,7 +81,7 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
         world.spawn((
             ball.clone(),
             ColliderPose::from_translation(start),
-            Velocity(v),
+            BodyVelocity(v),
             Shot::default(),
             fidelity,
             balls,
@@ -90,7 +90,7 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
 }
 
 /// Moves the flying balls (no integration plugin: the shots are the scene's own bodies).
-fn fly(mut q: Query<(&mut Velocity, &mut ColliderPose), With<Shot>>) {
+fn fly(mut q: Query<(&mut BodyVelocity, &mut ColliderPose), With<Shot>>) {
     for (mut v, mut pose) in &mut q {
         v.0.y += GRAVITY * DT;
         pose.0.translation += v.0 * DT;
@@ -101,7 +101,7 @@ fn fly(mut q: Query<(&mut Velocity, &mut ColliderPose), With<Shot>>) {
 /// contacts involving a shot and leaves the others in the queue.
 fn embed(
     mut queue: ResMut<ContactQueue>,
-    mut shots: Query<(&mut Shot, &mut Velocity, &ColliderPose)>,
+    mut shots: Query<(&mut Shot, &mut BodyVelocity, &ColliderPose)>,
 ) {
     queue.consume(|c| {
         for e in [c.a, c.b] {

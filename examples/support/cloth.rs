@@ -45,12 +45,12 @@ pub fn setup(app: &mut App, options: &Options) {
         .add_systems(PostUpdate, step_cloth.before(CollisionSystems::Prepare));
     let world = app.world_mut();
     world.spawn((
-        Collider::new(generate::icosphere(0.5, 3)),
+        MeshCollider::new(generate::icosphere(0.5, 3)),
         ColliderPose::from_translation(Vec3::ZERO),
         Fidelity::Exact,
     ));
     world.spawn((
-        Collider::new(generate::cuboid(Vec3::new(3.0, 0.25, 3.0), 4)),
+        MeshCollider::new(generate::cuboid(Vec3::new(3.0, 0.25, 3.0), 4)),
         ColliderPose::from_translation(Vec3::new(0.0, -0.85, 0.0)),
         Fidelity::Exact,
     ));

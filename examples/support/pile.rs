@@ -13,7 +13,7 @@ use super::{Options, normalized, shared_mesh};
 pub const DEFAULT_BODIES: usize = 1000;
 
 /// The bodies' meshes: a few generated shapes, plus the shared Suzanne when present.
-pub fn body_colliders() -> Vec<Collider> {
+pub fn body_colliders() -> Vec<MeshCollider> {
     let mut meshes = vec![
         generate::icosphere(0.25, 1),
         generate::torus(0.2, 0.08, 16, 8),
@@ -22,7 +22,7 @@ pub fn body_colliders() -> Vec<Collider> {
     if let Some(m) = shared_mesh("suzanne.obj") {
         meshes.push(normalized(&m, 0.5));
     }
-    meshes.into_iter().map(Collider::new).collect()
+    meshes.into_iter().map(MeshCollider::new).collect()
 }
 
 pub fn setup(app: &mut App, options: &Options) {
@@ -45,7 +45,7 @@ pub fn setup(app: &mut App, options: &Options) {
     let world = app.world_mut();
     // Subdivided, so that its tree has small leaves (a few huge triangles make every exact
     // test against it slow).
-    let slab = |h: Vec3| Collider::new(generate::cuboid(h, 12));
+    let slab = |h: Vec3| MeshCollider::new(generate::cuboid(h, 12));
     let height = 1.5;
     // The box is static level geometry of a few large triangles: tested exactly (cheap, and
     // nothing may fall through it); the bodies among themselves use the default fidelity.
@@ -86,12 +86,12 @@ pub fn setup(app: &mut App, options: &Options) {
         world.spawn((
             colliders[i % colliders.len()].clone(),
             ColliderPose(Pose::new(position, rotation)),
-            Velocity(Vec3::new(
+            BodyVelocity(Vec3::new(
                 rng.random_range(-0.5..0.5),
                 0.0,
                 rng.random_range(-0.5..0.5),
             )),
-            Mass(1.0),
+            BodyMass(1.0),
         ));
     }
 }
@@ -102,6 +102,6 @@ fn pose(x: f32, y: f32, z: f32) -> ColliderPose {
 
 /// Bodies with a velocity still above `speed` (how settled the pile is).
 pub fn moving(world: &mut World, speed: f32) -> usize {
-    let mut q = world.query::<&Velocity>();
+    let mut q = world.query::<&BodyVelocity>();
     q.iter(world).filter(|v| v.0.length() > speed).count()
 }

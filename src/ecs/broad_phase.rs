@@ -18,7 +18,7 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::components::CollisionLayers;
+use super::components::ContactLayers;
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::pairs::PairTable;
@@ -37,7 +37,7 @@ pub struct BroadPhaseState {
     /// The fat box before this run's move ([`Aabb::EMPTY`] when new or refiltered: its pairs
     /// are not known from it).
     old_fat: Vec<Aabb>,
-    layers: Vec<CollisionLayers>,
+    layers: Vec<ContactLayers>,
     moved_run: Vec<u32>,
     present: Vec<bool>,
     /// Whether the slot is in `order` (a removed one stays there until the next sweep).
@@ -92,7 +92,7 @@ impl BroadPhaseState {
         if self.fat.len() < n {
             self.fat.resize(n, Aabb::EMPTY);
             self.old_fat.resize(n, Aabb::EMPTY);
-            self.layers.resize(n, CollisionLayers::ALL);
+            self.layers.resize(n, ContactLayers::ALL);
             self.moved_run.resize(n, 0);
             self.present.resize(n, false);
             self.listed.resize(n, false);
@@ -467,7 +467,7 @@ struct SweepBox {
     aabb: Aabb,
     /// The fat box before this run's move (the same when it did not move).
     old: Aabb,
-    layers: CollisionLayers,
+    layers: ContactLayers,
     /// The collider's slot.
     index: u32,
     /// The first lane the box is in (a pair is reported there).

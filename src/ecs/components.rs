@@ -12,29 +12,29 @@ use crate::mesh::{MeshError, TriMesh};
 
 /// A rigid collider: one mesh and its ADB-tree, shared (`Arc`) by every entity that uses it.
 ///
-/// Cloning a `Collider` clones the `Arc`, not the mesh: spawn a thousand boulders from one
-/// `Collider` and there is one tree in memory. Building the ADB-tree costs more than the BVH
+/// Cloning a `MeshCollider` clones the `Arc`, not the mesh: spawn a thousand boulders from one
+/// `MeshCollider` and there is one tree in memory. Building the ADB-tree costs more than the BVH
 /// (cell counts and a calibration fit), so build each mesh once and clone the collider.
 ///
-/// Inserting a `Collider` also inserts, if missing, a [`ColliderPose`], a [`ColliderScale`]
-/// and a [`CollidingEntities`] (required components). A scaled collider is queried with a
+/// Inserting a `MeshCollider` also inserts, if missing, a [`ColliderPose`], a [`ColliderScale`]
+/// and a [`TouchingEntities`] (required components). A scaled collider is queried with a
 /// scaled copy of the tree, built once per mesh and scale and shared by every entity that
 /// uses that mesh at that scale.
 ///
 /// # Example
 /// ```
 /// use stochastic_collision::prelude::*;
-/// let ball = Collider::new(generate::icosphere(0.5, 1));
+/// let ball = MeshCollider::new(generate::icosphere(0.5, 1));
 /// let same_tree = ball.clone();
 /// assert!(std::sync::Arc::ptr_eq(ball.tree(), same_tree.tree()));
 /// ```
 #[derive(Component, Clone, Debug)]
-#[require(ColliderPose, ColliderScale, CollidingEntities)]
-pub struct Collider {
+#[require(ColliderPose, ColliderScale, TouchingEntities)]
+pub struct MeshCollider {
     tree: Arc<AdbTree>,
 }
 
-impl Collider {
+impl MeshCollider {
     /// Builds the BVH and the ADB-tree of `mesh` (default options).
     pub fn new(mesh: TriMesh) -> Self {
         Self::from_tree(Arc::new(AdbTree::new(CollisionMesh::new(mesh))))
@@ -96,7 +96,7 @@ impl Collider {
 /// assert_eq!(cloth.positions().len(), 25);
 /// ```
 #[derive(Component, Clone, Debug)]
-#[require(ColliderPose, ColliderScale, CollidingEntities)]
+#[require(ColliderPose, ColliderScale, TouchingEntities)]
 pub struct Deformable {
     pub(crate) mesh: Arc<CollisionMesh>,
     pub(crate) positions: Vec<Vec3>,
@@ -219,26 +219,26 @@ pub struct SelfCollision;
 /// # Example
 /// ```
 /// use stochastic_collision::prelude::*;
-/// let debris = CollisionLayers::new(0b01, 0b10); // member of layer 0, hits layer 1 only
-/// let ground = CollisionLayers::new(0b10, 0b01);
+/// let debris = ContactLayers::new(0b01, 0b10); // member of layer 0, hits layer 1 only
+/// let ground = ContactLayers::new(0b10, 0b01);
 /// assert!(debris.interacts_with(&ground));
 /// assert!(!debris.interacts_with(&debris));
 /// ```
 #[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
-pub struct CollisionLayers {
+pub struct ContactLayers {
     /// Layers this entity belongs to (bit mask).
     pub memberships: u32,
     /// Layers this entity collides with (bit mask).
     pub filters: u32,
 }
 
-impl Default for CollisionLayers {
+impl Default for ContactLayers {
     fn default() -> Self {
         Self::ALL
     }
 }
 
-impl CollisionLayers {
+impl ContactLayers {
     /// Member of every layer, colliding with every layer.
     pub const ALL: Self = Self {
         memberships: u32::MAX,
@@ -255,18 +255,18 @@ impl CollisionLayers {
 
     /// Whether a pair of entities with these layers is tested.
     #[inline]
-    pub fn interacts_with(&self, other: &CollisionLayers) -> bool {
+    pub fn interacts_with(&self, other: &ContactLayers) -> bool {
         self.memberships & other.filters != 0 && other.memberships & self.filters != 0
     }
 }
 
 /// The entities this entity currently collides with (sorted), kept up to date by the Report
-/// stage. Inserted automatically with [`Collider`] and [`Deformable`]; a mesh's own
+/// stage. Inserted automatically with [`MeshCollider`] and [`Deformable`]; a mesh's own
 /// self-collision is not listed.
 #[derive(Component, Clone, Debug, Default, PartialEq, Eq)]
-pub struct CollidingEntities(pub(crate) Vec<Entity>);
+pub struct TouchingEntities(pub(crate) Vec<Entity>);
 
-impl CollidingEntities {
+impl TouchingEntities {
     /// The colliding entities, sorted.
     #[inline]
     pub fn entities(&self) -> &[Entity] {
@@ -339,7 +339,7 @@ impl ColliderPose {
 ///
 /// let mut app = App::new();
 /// app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate));
-/// let ball = Collider::new(generate::icosphere(1.0, 2));
+/// let ball = MeshCollider::new(generate::icosphere(1.0, 2));
 /// // Radius 2 (scaled) at the origin reaches a ball of radius 1 at x = 2.5.
 /// app.world_mut().spawn((ball.clone(), ColliderScale::uniform(2.0)));
 /// app.world_mut().spawn((ball, ColliderPose::from_translation(Vec3::X * 2.5)));
@@ -367,9 +367,21 @@ impl ColliderScale {
     }
 }
 
+/// Marks a collider as a sensor (a trigger volume): its pairs are detected and reported as
+/// usual (events, [`TouchingEntities`], contacts through
+/// [`CollisionPairs`](super::CollisionPairs) and [`Contact`](super::Contact) messages), but its
+/// contacts never reach the [`ContactQueue`](super::ContactQueue): no response pushes
+/// anything out of it or away from it. Named so that it does not clash with avian's and
+/// bevy_rapier's `Sensor`.
+///
+/// Contact is contact of surfaces: with [`Fidelity::Exact`] a body wholly inside a closed
+/// sensor mesh does not touch it (ADB's interpenetration certificate does count it).
+#[derive(Component, Clone, Copy, Debug, Default)]
+pub struct CollisionSensor;
+
 /// Opt in to per-entity observer events ([`CollisionStarted`](super::CollisionStarted) and
 /// [`CollisionEnded`](super::CollisionEnded) triggered on this entity, observed with
 /// `On<CollisionStarted>`). The marker is read when events are emitted, so adding it to an
 /// entity that already exists works.
 #[derive(Component, Clone, Copy, Debug, Default)]
-pub struct CollisionEventsEnabled;
+pub struct ObserveCollisions;

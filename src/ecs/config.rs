@@ -86,7 +86,7 @@ pub struct CollisionConfig {
     pub proxy_margin: f32,
     /// Write a [`Contact`](super::Contact) message per contact point of every pair answered
     /// in a run (off by default: contacts are read through
-    /// [`Collisions`](super::Collisions), and responses take them from the
+    /// [`CollisionPairs`](super::CollisionPairs), and responses take them from the
     /// [`ContactQueue`](super::ContactQueue)).
     pub contact_messages: bool,
     /// Contacts reported per pair with a deformable mesh at most (rigid pairs report the

@@ -5,7 +5,7 @@
 //! As messages, in any system (runs after [`CollisionSystems::Report`] see them in the same
 //! frame; [`Contact`] messages only with
 //! [`CollisionConfig::contact_messages`](super::CollisionConfig::contact_messages), else read
-//! contacts through [`Collisions`](super::Collisions)):
+//! contacts through [`CollisionPairs`](super::CollisionPairs)):
 //! ```
 //! # use bevy_ecs::prelude::*;
 //! # use stochastic_collision::prelude::*;
@@ -19,13 +19,13 @@
 //! }
 //! # bevy_ecs::system::assert_is_system(on_hits);
 //! ```
-//! Or per entity, with an observer, for entities with [`CollisionEventsEnabled`]:
+//! Or per entity, with an observer, for entities with [`ObserveCollisions`]:
 //! ```
 //! # use bevy_ecs::prelude::*;
 //! # use stochastic_collision::prelude::*;
 //! # let mut world = World::new();
 //! world
-//!     .spawn(CollisionEventsEnabled)
+//!     .spawn(ObserveCollisions)
 //!     .observe(|hit: On<CollisionStarted>| println!("{:?} hit me", hit.other));
 //! ```
 //! Messages follow Bevy's rule: a message stays readable for two app updates, so a reader
@@ -39,7 +39,7 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::system::SystemParam;
 use glam::Vec3;
 
-use super::components::{CollidingEntities, CollisionEventsEnabled};
+use super::components::{CollisionSensor, ObserveCollisions, TouchingEntities};
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, end_frame};
 use super::narrow_phase::Method;
@@ -51,7 +51,7 @@ use crate::mesh::MeshError;
 /// `entity == other`). Written once per contact interval.
 ///
 /// As a message, `entity < other`. As an observer event (entities with
-/// [`CollisionEventsEnabled`]), `entity` is the observed entity.
+/// [`ObserveCollisions`]), `entity` is the observed entity.
 ///
 /// `method` and `probability` say how sure the start is: an exact answer (`Exact`,
 /// `SelfCollision`: probability 1), an ADB estimate, a tracked contact, a box overlap
@@ -276,7 +276,7 @@ impl ContactQueue {
 }
 
 /// Writes the events of this run's transitions (pairs whose touching state flipped, in pair
-/// order: the ends first, then the starts), updates [`CollidingEntities`], triggers observer
+/// order: the ends first, then the starts), updates [`TouchingEntities`], triggers observer
 /// events, and hands this run's contacts (of the pairs answered in this run) to the
 /// [`ContactQueue`] and, if [`CollisionConfig::contact_messages`], as [`Contact`] messages.
 #[allow(clippy::too_many_arguments)]
@@ -284,8 +284,9 @@ pub fn report_collisions(
     mut pairs: ResMut<PairTable>,
     mut queue: ResMut<ContactQueue>,
     config: Res<CollisionConfig>,
-    mut colliding: Query<&mut CollidingEntities>,
-    observed: Query<(), With<CollisionEventsEnabled>>,
+    mut colliding: Query<&mut TouchingEntities>,
+    observed: Query<(), With<ObserveCollisions>>,
+    sensors: Query<(), With<CollisionSensor>>,
     mut writers: ReportWriters,
     mut commands: Commands,
     mut diag: ResMut<CollisionDiagnostics>,
@@ -366,6 +367,10 @@ pub fn report_collisions(
         writers.contacts.write_batch(fresh.iter().copied());
         counters.contacts += fresh.len() as u64;
     }
+    // Sensors' contacts are reported, never responded to.
+    if !sensors.is_empty() {
+        fresh.retain(|c| !sensors.contains(c.a) && !sensors.contains(c.b));
+    }
     counters.started += started;
     counters.ended += ended;
     queue.refill(&mut fresh, config.response_budget);
@@ -381,8 +386,8 @@ pub struct ReportWriters<'w> {
     contacts: MessageWriter<'w, Contact>,
 }
 
-/// Updates both entities' [`CollidingEntities`] (not for a self-collision).
-fn set_colliding(q: &mut Query<&mut CollidingEntities>, a: Entity, b: Entity, touching: bool) {
+/// Updates both entities' [`TouchingEntities`] (not for a self-collision).
+fn set_colliding(q: &mut Query<&mut TouchingEntities>, a: Entity, b: Entity, touching: bool) {
     if a == b {
         return;
     }
@@ -400,7 +405,7 @@ fn set_colliding(q: &mut Query<&mut CollidingEntities>, a: Entity, b: Entity, to
 /// Triggers the observer event on each endpoint that opted in, as `(observed, other)`.
 fn notify<E>(
     commands: &mut Commands,
-    observed: &Query<(), With<CollisionEventsEnabled>>,
+    observed: &Query<(), With<ObserveCollisions>>,
     a: Entity,
     b: Entity,
     make: impl Fn(Entity, Entity) -> E,

@@ -2,13 +2,13 @@
 //! describe colliders, collision events, a frame-time budget and budgeted responses.
 //!
 //! # Overview
-//! Add [`StochasticCollisionPlugin`], give entities a [`Collider`] (rigid, shared mesh and
+//! Add [`StochasticCollisionPlugin`], give entities a [`MeshCollider`] (rigid, shared mesh and
 //! ADB-tree) or a [`Deformable`] (owned, refitted mesh) placed with bevy_transform's
 //! `Transform` (with the `transform` feature, the default; else [`ColliderPose`] and
 //! [`ColliderScale`]), and read [`CollisionStarted`] and [`CollisionEnded`] messages (with
 //! the method and confidence of the answer), or observe them per entity
-//! ([`CollisionEventsEnabled`]); read contacts, touching or not, with their confidence and
-//! age through the [`Collisions`] system parameter ([`Contact`] messages on request:
+//! ([`ObserveCollisions`]); read contacts, touching or not, with their confidence and
+//! age through the [`CollisionPairs`] system parameter ([`Contact`] messages on request:
 //! [`CollisionConfig::contact_messages`]).
 //!
 //! The plugin keeps its world between runs: a [`ColliderTable`] (one slot per collider) and a
@@ -20,14 +20,14 @@
 //!    with a [`CollisionError`] and skipped), world boxes.
 //! 2. **BroadPhase**: colliders whose world box left their broad-phase (fat) box, and only
 //!    they, get a new one; pairs are created and removed at that moment (sweep and prune over
-//!    the fat boxes, [`CollisionLayers`] filtering).
+//!    the fat boxes, [`ContactLayers`] filtering).
 //! 3. **NarrowPhase**: the *active* pairs (of colliders that changed, new, or waiting for a
 //!    test), in parallel, by [`Fidelity`]: exact, ADB (cut by its share of the
 //!    [`FrameBudget`], priority by last confidence, closeness, speed and waiting) or bounds;
 //!    under a time budget the pairs not tested keep their last answer, one run older.
 //! 4. **Tracking**: tracked pairs and self-collision of [`SelfCollision`] meshes, in parallel.
 //! 5. **Report**: the pairs whose touching state flipped: started/ended messages in a
-//!    deterministic order, [`CollidingEntities`], observer events; this run's contacts to the
+//!    deterministic order, [`TouchingEntities`], observer events; this run's contacts to the
 //!    [`ContactQueue`].
 //! 6. **Response**: the built-in [`ImpulseResponsePlugin`] and [`PenaltyResponsePlugin`], or
 //!    your own systems, consuming contacts by priority within the response budget.
@@ -50,6 +50,7 @@ mod events;
 mod narrow_phase;
 mod pairs;
 mod plugin;
+mod plugin_group;
 mod pool;
 mod prepare;
 mod response;
@@ -60,8 +61,8 @@ mod tracking_systems;
 pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{
-    Collider, ColliderPose, ColliderScale, CollidingEntities, CollisionEventsEnabled,
-    CollisionLayers, Deformable, Fidelity, SelfCollision,
+    ColliderPose, ColliderScale, CollisionSensor, ContactLayers, Deformable, Fidelity,
+    MeshCollider, ObserveCollisions, SelfCollision, TouchingEntities,
 };
 pub use config::{CollisionConfig, FrameBudget};
 pub use contact::ContactPoint;
@@ -72,14 +73,15 @@ pub use events::{
     CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact, ContactQueue,
 };
 pub use narrow_phase::{Method, NarrowPhaseState, PairOutcome};
-pub use pairs::{Collisions, PairTable, PairView};
+pub use pairs::{CollisionPairs, PairTable, PairView};
 pub use plugin::StochasticCollisionPlugin;
+pub use plugin_group::StochasticCollisionPlugins;
 pub use pool::CollisionTaskPool;
 pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState, RemovedColliders};
 pub use response::{
-    DEFAULT_STEP, ImpulseResponsePlugin, ImpulseSettings, Mass, PenaltyResponsePlugin,
-    PenaltySettings, Rest, Velocity, impulse_response, integrate_velocities, penalty_response,
-    sleep_bodies,
+    BodyMass, BodyVelocity, DEFAULT_STEP, ImpulseResponsePlugin, ImpulseSettings,
+    PenaltyResponsePlugin, PenaltySettings, Rest, impulse_response, integrate_velocities,
+    penalty_response, sleep_bodies,
 };
 pub use schedule::{CollisionSchedule, CollisionSystems};
 pub use tracking_systems::{FeaturePairs, TrackingState};

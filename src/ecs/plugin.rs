@@ -49,14 +49,14 @@ use super::tracking_systems::{
 ///
 /// let mut app = App::new();
 /// app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate));
-/// let ball = Collider::new(generate::icosphere(1.0, 2));
+/// let ball = MeshCollider::new(generate::icosphere(1.0, 2));
 /// let a = app.world_mut().spawn((ball.clone(), ColliderPose::from_translation(Vec3::ZERO))).id();
 /// let b = app.world_mut().spawn((ball, ColliderPose::from_translation(Vec3::X * 1.5))).id();
 /// app.update();
 ///
 /// let started = app.world().resource::<Messages<CollisionStarted>>();
 /// assert_eq!(started.len(), 1);
-/// assert!(app.world().get::<CollidingEntities>(a).unwrap().contains(b));
+/// assert!(app.world().get::<TouchingEntities>(a).unwrap().contains(b));
 /// ```
 pub struct StochasticCollisionPlugin {
     /// The schedule the pipeline runs in (default `FixedPostUpdate`).

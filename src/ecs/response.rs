@@ -1,8 +1,8 @@
 //! Response stage: built-in responses that consume the [`ContactQueue`], as optional plugins.
 //!
-//! - [`ImpulseResponsePlugin`]: simple rigid bodies ([`Velocity`], optional [`Mass`]):
+//! - [`ImpulseResponsePlugin`]: simple rigid bodies ([`BodyVelocity`], optional [`BodyMass`]):
 //!   integrates velocities under gravity before the pipeline, and resolves contacts with
-//!   restitution impulses and position correction. Bodies without `Velocity` are static.
+//!   restitution impulses and position correction. Bodies without `BodyVelocity` are static.
 //! - [`PenaltyResponsePlugin`]: deformable meshes: pushes the vertices of the contact triangles
 //!   apart along the contact normal (position correction), as a penalty force would.
 //!
@@ -57,9 +57,9 @@ use super::schedule::{CollisionSchedule, CollisionSystems};
 /// Linear velocity of a simple rigid body (units per second).
 #[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
 #[require(Rest)]
-pub struct Velocity(pub Vec3);
+pub struct BodyVelocity(pub Vec3);
 
-/// Sleep state of a body with [`Velocity`]: a body slower than
+/// Sleep state of a body with [`BodyVelocity`]: a body slower than
 /// [`ImpulseSettings::sleep_speed`] for [`ImpulseSettings::sleep_frames`] runs falls asleep:
 /// it stops moving (so its pairs are not worked on: their answers stand) until an awake body
 /// hits it faster than [`ImpulseSettings::wake_speed`].
@@ -81,11 +81,11 @@ impl Rest {
     }
 }
 
-/// Mass of a body with [`Velocity`] (default 1).
+/// BodyMass of a body with [`BodyVelocity`] (default 1).
 #[derive(Component, Debug, Clone, Copy, PartialEq)]
-pub struct Mass(pub f32);
+pub struct BodyMass(pub f32);
 
-impl Default for Mass {
+impl Default for BodyMass {
     fn default() -> Self {
         Self(1.0)
     }
@@ -94,7 +94,7 @@ impl Default for Mass {
 /// Settings of [`ImpulseResponsePlugin`] (a resource).
 #[derive(Resource, Debug, Clone, Copy, PartialEq)]
 pub struct ImpulseSettings {
-    /// Gravity applied to bodies with [`Velocity`].
+    /// Gravity applied to bodies with [`BodyVelocity`].
     pub gravity: Vec3,
     /// Time step of the integration. `None` (default): bevy_time's `Time` of the schedule
     /// (`Time<Fixed>`'s step in `FixedPostUpdate`, the frame's delta elsewhere), or
@@ -106,7 +106,7 @@ pub struct ImpulseSettings {
     pub correction: f32,
     /// Penetration left uncorrected (avoids jitter).
     pub slop: f32,
-    /// Velocity damping per second (air drag, rolling friction).
+    /// BodyVelocity damping per second (air drag, rolling friction).
     pub damping: f32,
     /// Coulomb friction coefficient at contacts.
     pub friction: f32,
@@ -220,13 +220,13 @@ fn response_schedule(
     }
 }
 
-/// Moves the awake bodies with [`Velocity`] by one step under gravity: their pose, and their
+/// Moves the awake bodies with [`BodyVelocity`] by one step under gravity: their pose, and their
 /// `Transform` when they have one (what the game draws, and where the next run reads the
 /// pose).
 pub fn integrate_velocities(
     settings: Res<ImpulseSettings>,
     time: Option<Res<Time>>,
-    mut q: Query<(&mut Velocity, &mut ColliderPose, &Rest, Placement)>,
+    mut q: Query<(&mut BodyVelocity, &mut ColliderPose, &Rest, Placement)>,
     parents: Parents,
 ) {
     let dt = settings.step(time.as_deref());
@@ -241,7 +241,7 @@ pub fn integrate_velocities(
 }
 
 /// Counts still runs and puts bodies to sleep (after the impulses).
-pub fn sleep_bodies(settings: Res<ImpulseSettings>, mut q: Query<(&mut Velocity, &mut Rest)>) {
+pub fn sleep_bodies(settings: Res<ImpulseSettings>, mut q: Query<(&mut BodyVelocity, &mut Rest)>) {
     if settings.sleep_frames == 0 {
         return;
     }
@@ -286,8 +286,8 @@ pub fn impulse_response(
 /// What the impulse response reads and writes of a body.
 type BodyData = (
     &'static mut ColliderPose,
-    Option<&'static mut Velocity>,
-    Option<&'static Mass>,
+    Option<&'static mut BodyVelocity>,
+    Option<&'static BodyMass>,
     Option<&'static mut Rest>,
     Placement,
 );
@@ -295,7 +295,11 @@ type BodyData = (
 type Body<'a> = QueryItem<'a, 'a, BodyData>;
 
 /// Inverse mass; 0 for static and sleeping bodies.
-fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>, rest: &Option<Mut<Rest>>) -> f32 {
+fn inverse_mass(
+    v: &Option<Mut<BodyVelocity>>,
+    m: Option<&BodyMass>,
+    rest: &Option<Mut<Rest>>,
+) -> f32 {
     if rest.as_ref().is_some_and(|r| r.asleep) {
         return 0.0;
     }
@@ -308,7 +312,7 @@ fn inverse_mass(v: &Option<Mut<Velocity>>, m: Option<&Mass>, rest: &Option<Mut<R
 
 /// Wakes a sleeping body that an awake one approaches faster than the wake speed.
 fn wake_if_hit<'w>(s: &ImpulseSettings, c: &Contact, a: &mut Body<'w>, b: &mut Body<'w>) {
-    let vel = |v: &Option<Mut<Velocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
+    let vel = |v: &Option<Mut<BodyVelocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
     let approach = -(vel(&b.1) - vel(&a.1)).dot(c.normal);
     if approach > s.wake_speed {
         for r in [a.3.as_mut(), b.3.as_mut()].into_iter().flatten() {
@@ -335,7 +339,7 @@ fn resolve<'w>(
         return;
     }
     let n = c.normal;
-    let vel = |v: &Option<Mut<Velocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
+    let vel = |v: &Option<Mut<BodyVelocity>>| v.as_ref().map_or(Vec3::ZERO, |v| v.0);
     let rel = vel(&vb) - vel(&va);
     let vn = rel.dot(n);
     if vn < 0.0 {

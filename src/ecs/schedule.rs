@@ -24,7 +24,7 @@ pub enum CollisionSystems {
     NarrowPhase,
     /// Tracked pairs and self-collision of deformable meshes, in parallel.
     Tracking,
-    /// The pairs whose touching state flipped: started/ended messages, `CollidingEntities`,
+    /// The pairs whose touching state flipped: started/ended messages, `TouchingEntities`,
     /// observer events; this run's contacts to the contact queue (and as messages, on request).
     Report,
     /// Responses consuming the contact queue (built-in plugins or your own systems).

@@ -58,8 +58,8 @@ pub fn app() -> App {
     )
 }
 
-pub fn ball(radius: f32) -> Collider {
-    Collider::new(generate::icosphere(radius, 2))
+pub fn ball(radius: f32) -> MeshCollider {
+    MeshCollider::new(generate::icosphere(radius, 2))
 }
 
 pub fn at(x: f32, y: f32, z: f32) -> ColliderPose {

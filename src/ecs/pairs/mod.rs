@@ -1,8 +1,8 @@
-//! Pairs of colliders, kept from run to run: the [`PairTable`] and the [`Collisions`] system
+//! Pairs of colliders, kept from run to run: the [`PairTable`] and the [`CollisionPairs`] system
 //! parameter that reads it.
-mod collisions;
+mod collision_pairs;
 mod table;
 
-pub use collisions::{Collisions, PairView};
+pub use collision_pairs::{CollisionPairs, PairView};
 pub use table::PairTable;
 pub(crate) use table::{PairEnds, PairSlot, Record};

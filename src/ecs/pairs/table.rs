@@ -1,7 +1,7 @@
 //! The persistent pair table: one stable slot per candidate pair of colliders, kept from run
 //! to run. Created and removed by the broad phase, answered by the narrow phase and the
 //! Tracking stage, read by the Report stage (its transitions only) and by users through
-//! [`Collisions`](super::Collisions).
+//! [`CollisionPairs`](super::CollisionPairs).
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 

@@ -7,7 +7,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec3, Vec3A};
 use smallvec::SmallVec;
 
-use super::super::components::{CollisionLayers, Fidelity};
+use super::super::components::{ContactLayers, Fidelity};
 use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::adb::AdbTree;
 use crate::bvh::CollisionMesh;
@@ -65,7 +65,7 @@ pub struct ColliderEntry {
     /// Its fidelity.
     pub fidelity: Fidelity,
     /// Its layers.
-    pub layers: CollisionLayers,
+    pub layers: ContactLayers,
     /// Whether it has the [`SelfCollision`](super::super::SelfCollision) marker and is
     /// deformable.
     pub self_collision: bool,

@@ -37,7 +37,7 @@ use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;
 
 use super::components::{
-    Collider, ColliderPose, ColliderScale, CollisionLayers, Deformable, Fidelity, SelfCollision,
+    ColliderPose, ColliderScale, ContactLayers, Deformable, Fidelity, MeshCollider, SelfCollision,
 };
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
@@ -66,11 +66,11 @@ pub struct RemovedColliders {
 
 /// The components whose removal changes or removes a collider.
 type ColliderParts = (
-    Collider,
+    MeshCollider,
     ColliderScale,
     Deformable,
     Fidelity,
-    CollisionLayers,
+    ContactLayers,
     SelfCollision,
     ColliderPose,
 );
@@ -155,25 +155,25 @@ type ColliderData<'a> = (
     Entity,
     &'a ColliderPose,
     Option<&'a ColliderScale>,
-    Option<&'a Collider>,
+    Option<&'a MeshCollider>,
     Option<&'a Deformable>,
     Option<&'a Fidelity>,
-    Option<&'a CollisionLayers>,
+    Option<&'a ContactLayers>,
     Has<SelfCollision>,
 );
 
 /// One entity's [`ColliderData`].
 type ColliderItem<'a> = QueryItem<'a, 'a, ColliderData<'static>>;
 
-type IsCollider = Or<(With<Collider>, With<Deformable>)>;
+type IsCollider = Or<(With<MeshCollider>, With<Deformable>)>;
 
 type AnyChange = Or<(
     Changed<ColliderPose>,
     Changed<ColliderScale>,
-    Changed<Collider>,
+    Changed<MeshCollider>,
     Changed<Deformable>,
     Changed<Fidelity>,
-    Changed<CollisionLayers>,
+    Changed<ContactLayers>,
     Changed<SelfCollision>,
 )>;
 

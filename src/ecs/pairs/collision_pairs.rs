@@ -24,7 +24,7 @@ use super::table::{PairEnds, PairHot, PairSlot, PairTable};
 /// use bevy_ecs::prelude::*;
 /// use stochastic_collision::prelude::*;
 ///
-/// fn report(collisions: Collisions, q: Query<Entity, With<Collider>>) {
+/// fn report(collisions: CollisionPairs, q: Query<Entity, With<MeshCollider>>) {
 ///     for e in &q {
 ///         for pair in collisions.touching_of(e) {
 ///             let depth = pair.contacts().iter().map(|c| c.depth).fold(0.0, f32::max);
@@ -36,25 +36,25 @@ use super::table::{PairEnds, PairHot, PairSlot, PairTable};
 /// let mut app = App::new();
 /// app.add_plugins(StochasticCollisionPlugin::in_schedule(PostUpdate))
 ///     .add_systems(PostUpdate, report.after(CollisionSystems::Report));
-/// let ball = Collider::new(generate::icosphere(1.0, 2));
+/// let ball = MeshCollider::new(generate::icosphere(1.0, 2));
 /// let a = app.world_mut().spawn((ball.clone(), ColliderPose::from_translation(Vec3::ZERO))).id();
 /// let b = app.world_mut().spawn((ball, ColliderPose::from_translation(Vec3::X * 1.5))).id();
 /// app.update();
 /// let touching = app
 ///     .world_mut()
-///     .run_system_once(move |c: Collisions| c.touching(a, b))
+///     .run_system_once(move |c: CollisionPairs| c.touching(a, b))
 ///     .unwrap();
 /// assert!(touching);
 /// # use bevy_ecs::system::RunSystemOnce;
 /// ```
 #[derive(SystemParam)]
-pub struct Collisions<'w> {
+pub struct CollisionPairs<'w> {
     pairs: Res<'w, PairTable>,
     colliders: Res<'w, ColliderTable>,
     diagnostics: Res<'w, CollisionDiagnostics>,
 }
 
-impl<'w> Collisions<'w> {
+impl<'w> CollisionPairs<'w> {
     /// The pair of `a` and `b` (in either order), if they are close.
     pub fn get(&self, a: Entity, b: Entity) -> Option<PairView<'_>> {
         let (a, b) = (a.min(b), a.max(b));
@@ -101,7 +101,7 @@ impl<'w> Collisions<'w> {
     }
 }
 
-/// One pair as [`Collisions`] shows it.
+/// One pair as [`CollisionPairs`] shows it.
 #[derive(Clone, Copy)]
 pub struct PairView<'a> {
     slot: &'a PairSlot,

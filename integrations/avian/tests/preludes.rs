@@ -1,0 +1,88 @@
+//! Both preludes glob-imported in one scope, every name of this crate's prelude used: a name
+//! that both define would be an ambiguity error here (the test is that this compiles).
+#![allow(dead_code)]
+use avian3d::prelude::*;
+use bevy::prelude::*;
+use stochastic_collision::prelude::*;
+
+type OursCore = (
+    AdbOutcome,
+    AdbQuery,
+    AdbTree,
+    AdbWorkspace,
+    Budget,
+    Bvh,
+    CollisionMesh,
+    ExactOptions,
+    ExactOutcome,
+    MeshDistance,
+    QueryWorkspace,
+    TrianglePair,
+    Aabb,
+    Pose,
+    MeshError,
+    Topology,
+    TriMesh,
+    Quat,
+    Vec3,
+);
+
+type OursPlugin = (
+    BodyMass,
+    BodyVelocity,
+    ColliderPose,
+    ColliderScale,
+    CollisionConfig,
+    CollisionDiagnostics,
+    CollisionEnded,
+    CollisionError,
+    CollisionSensor,
+    CollisionStarted,
+    CollisionSystems,
+    Contact,
+    ContactLayers,
+    ContactQueue,
+    Deformable,
+    Fidelity,
+    FrameBudget,
+    ImpulseResponsePlugin,
+    MeshCollider,
+    Method,
+    ObserveCollisions,
+    PenaltyResponsePlugin,
+    SelfCollision,
+    StochasticCollisionPlugin,
+    StochasticCollisionPlugins,
+    TouchingEntities,
+);
+
+/// Avian's names that ours were renamed away from, still avian's.
+type Theirs = (
+    Collider,
+    CollisionLayers,
+    CollidingEntities,
+    CollisionEventsEnabled,
+    Sensor,
+    Mass,
+    CollisionStart,
+    CollisionEnd,
+    LinearVelocity,
+);
+
+fn reads_pairs(_ours: CollisionPairs, _theirs: Collisions) {}
+
+#[test]
+fn both_preludes_in_one_scope() {
+    let _ = (
+        closest_points,
+        intersecting_pairs,
+        intersects,
+        intersects_with,
+        self_intersections,
+        adb_intersects,
+    );
+    let mesh = generate::icosphere(1.0, 1);
+    let _ours = MeshCollider::new(mesh);
+    let _theirs = Collider::sphere(1.0);
+    bevy::ecs::system::assert_is_system(reads_pairs);
+}
