@@ -3,6 +3,7 @@
 use std::sync::Arc;
 
 use bevy_ecs::prelude::*;
+use bevy_reflect::prelude::*;
 use glam::Vec3;
 
 use crate::adb::{AdbBuildOptions, AdbTree};
@@ -28,7 +29,8 @@ use crate::mesh::{MeshError, TriMesh};
 /// let same_tree = ball.clone();
 /// assert!(std::sync::Arc::ptr_eq(ball.tree(), same_tree.tree()));
 /// ```
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(opaque, Component, Clone, Debug)]
 #[require(ColliderPose, ColliderScale, TouchingEntities)]
 pub struct MeshCollider {
     tree: Arc<AdbTree>,
@@ -95,7 +97,8 @@ impl MeshCollider {
 /// }
 /// assert_eq!(cloth.positions().len(), 25);
 /// ```
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Reflect, Clone, Debug)]
+#[reflect(opaque, Component, Clone, Debug)]
 #[require(ColliderPose, ColliderScale, TouchingEntities)]
 pub struct Deformable {
     pub(crate) mesh: Arc<CollisionMesh>,
@@ -156,7 +159,8 @@ impl Deformable {
 /// (rigid colliders) or `Exact` (deformables).
 ///
 /// [`CollisionConfig::default_fidelity`]: super::CollisionConfig::default_fidelity
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Component, Clone, Debug, PartialEq)]
 pub enum Fidelity {
     /// The exact BVH query: a certain answer. Not cut by a work budget; under a time budget,
     /// exact pairs are tested first, and those whose turn comes after the deadline get an
@@ -210,7 +214,8 @@ impl Fidelity {
 /// Marks a [`Deformable`] whose mesh may collide with itself: the self-collision pass (in the
 /// Tracking stage) runs only when some entity has this marker. Ignored on rigid colliders (a
 /// rigid mesh's self-intersections never change).
-#[derive(Component, Clone, Copy, Debug, Default)]
+#[derive(Component, Reflect, Clone, Copy, Debug, Default)]
+#[reflect(Component, Clone, Debug, Default)]
 pub struct SelfCollision;
 
 /// Which entities collide with which: a pair is tested only if each entity's `memberships`
@@ -224,7 +229,8 @@ pub struct SelfCollision;
 /// assert!(debris.interacts_with(&ground));
 /// assert!(!debris.interacts_with(&debris));
 /// ```
-#[derive(Component, Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
 pub struct ContactLayers {
     /// Layers this entity belongs to (bit mask).
     pub memberships: u32,
@@ -263,7 +269,8 @@ impl ContactLayers {
 /// The entities this entity currently collides with (sorted), kept up to date by the Report
 /// stage. Inserted automatically with [`MeshCollider`] and [`Deformable`]; a mesh's own
 /// self-collision is not listed.
-#[derive(Component, Clone, Debug, Default, PartialEq, Eq)]
+#[derive(Component, Reflect, Clone, Debug, Default, PartialEq, Eq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
 pub struct TouchingEntities(pub(crate) Vec<Entity>);
 
 impl TouchingEntities {
@@ -313,8 +320,9 @@ impl TouchingEntities {
 /// pose of this very run, without waiting for transform propagation, and for a new entity
 /// the pose it was spawned at. An entity with only a `GlobalTransform` gets it from that.
 /// Otherwise set it yourself (headless apps, simulations that own their poses).
-#[derive(Component, Clone, Copy, Debug, Default, PartialEq)]
-pub struct ColliderPose(pub Pose);
+#[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
+pub struct ColliderPose(#[reflect(remote = super::reflect::PoseReflect)] pub Pose);
 
 impl ColliderPose {
     /// A pose at `translation`, not rotated.
@@ -346,7 +354,8 @@ impl ColliderPose {
 /// app.update();
 /// assert_eq!(app.world().resource::<Messages<CollisionStarted>>().len(), 1);
 /// ```
-#[derive(Component, Clone, Copy, Debug, PartialEq)]
+#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
 pub struct ColliderScale(pub Vec3);
 
 impl Default for ColliderScale {
@@ -376,12 +385,14 @@ impl ColliderScale {
 ///
 /// Contact is contact of surfaces: with [`Fidelity::Exact`] a body wholly inside a closed
 /// sensor mesh does not touch it (ADB's interpenetration certificate does count it).
-#[derive(Component, Clone, Copy, Debug, Default)]
+#[derive(Component, Reflect, Clone, Copy, Debug, Default)]
+#[reflect(Component, Clone, Debug, Default)]
 pub struct CollisionSensor;
 
 /// Opt in to per-entity observer events ([`CollisionStarted`](super::CollisionStarted) and
 /// [`CollisionEnded`](super::CollisionEnded) triggered on this entity, observed with
 /// `On<CollisionStarted>`). The marker is read when events are emitted, so adding it to an
 /// entity that already exists works.
-#[derive(Component, Clone, Copy, Debug, Default)]
+#[derive(Component, Reflect, Clone, Copy, Debug, Default)]
+#[reflect(Component, Clone, Debug, Default)]
 pub struct ObserveCollisions;

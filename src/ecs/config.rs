@@ -3,12 +3,14 @@
 use std::time::Duration;
 
 use bevy_ecs::prelude::*;
+use bevy_reflect::prelude::*;
 
 use super::components::Fidelity;
 use crate::adb::{Decision, Order};
 
 /// How much work the collision stages (Prepare to Report) may do per run.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub enum FrameBudget {
     /// No limit: ADB pairs run until their `p_min`/`k_min` rule settles them.
     Unlimited,
@@ -30,7 +32,8 @@ pub enum FrameBudget {
 }
 
 /// The plugin's configuration, a resource (change it at run time).
-#[derive(Resource, Debug, Clone, PartialEq)]
+#[derive(Resource, Reflect, Debug, Clone, PartialEq)]
+#[reflect(Resource, Clone, Debug, Default, PartialEq)]
 pub struct CollisionConfig {
     /// Budget of the collision stages per run.
     pub budget: FrameBudget,
@@ -46,12 +49,14 @@ pub struct CollisionConfig {
     /// within the noise (the `accuracy_vs_time` report; the `profile` example's pile with
     /// `--adb-decision`); [`Decision::Confidence`], the default, more often ends a colliding
     /// query at an exact leaf hit, whose contact comes from the triangle pair.
+    #[reflect(remote = super::reflect::DecisionReflect)]
     pub adb_decision: Decision,
     /// In which order ADB traversals expand node pairs ([`Order`]). The default,
     /// [`Order::Straddle`], dives to a first intersecting triangle pair and, with exact leaves,
     /// estimates only the pairs its evidence checks and its confidence need: the fastest
     /// order on the `accuracy_vs_time` report's poses, at the same error. Without exact leaves
     /// every pair is estimated whatever the order, and only the ranking differs.
+    #[reflect(remote = super::reflect::OrderReflect)]
     pub adb_order: Order,
     /// The confidence from which an ADB answer that its traversal did not settle (its slice
     /// ran out, or leaf pairs were left to their estimates) counts as a collision

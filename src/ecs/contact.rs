@@ -7,7 +7,8 @@ use crate::bvh::{CollisionMesh, TrianglePair};
 use crate::geometry::{Aabb, Pose};
 
 /// One contact point between two meshes (or within one), in world space.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(bevy_reflect::Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub struct ContactPoint {
     /// Where the surfaces touch (approximately).
     pub point: Vec3,
@@ -16,6 +17,7 @@ pub struct ContactPoint {
     /// Estimated penetration along `normal` (0 when merely touching).
     pub depth: f32,
     /// The triangle pair (first entity, second entity), when the contact comes from one.
+    #[reflect(remote = super::reflect::OptionTrianglePairReflect)]
     pub triangles: Option<TrianglePair>,
 }
 

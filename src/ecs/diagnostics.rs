@@ -2,12 +2,14 @@
 use std::time::{Duration, Instant};
 
 use bevy_ecs::prelude::*;
+use bevy_reflect::prelude::*;
 
 use super::config::{CollisionConfig, FrameBudget};
 
 /// A stage of the pipeline whose time is measured (the Prepare set holds two: `prepare` and
 /// `refit`; the Tracking set two: `self_collision` and `tracking`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Reflect, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[reflect(Clone, Debug, PartialEq, Hash)]
 pub enum Stage {
     /// Pose validation and world boxes.
     Prepare,
@@ -56,7 +58,8 @@ impl Stage {
 }
 
 /// One stage's record.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Clone, Debug, Default, PartialEq)]
 pub struct StageRecord {
     /// Time in the current (or last) run; `None` if the stage did not run.
     pub last: Option<Duration>,
@@ -69,7 +72,8 @@ pub struct StageRecord {
 }
 
 /// Work done, summed over all runs.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Reflect, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[reflect(Clone, Debug, Default, PartialEq)]
 pub struct CollisionCounters {
     /// Node pairs visited by all queries.
     pub node_pairs: u64,
@@ -106,10 +110,12 @@ pub struct CollisionCounters {
 
 /// Timings and counters of the collision pipeline: per stage, the time of the last run (`None`
 /// = not run), runs and totals; the whole collision time (Prepare to Report) of the last run.
-#[derive(Resource, Debug, Clone)]
+#[derive(Resource, Reflect, Debug, Clone)]
+#[reflect(Resource, Clone, Debug, Default)]
 pub struct CollisionDiagnostics {
     /// Runs of the pipeline so far.
     pub frame: u64,
+    #[reflect(ignore, default = "Instant::now")]
     pub(crate) frame_start: Instant,
     /// Prepare to Report in the last run (wall clock, including scheduling gaps).
     pub collision_time: Duration,
@@ -117,6 +123,7 @@ pub struct CollisionDiagnostics {
     reserve: Duration,
     /// The Report stage's time in the last run.
     report_time: Duration,
+    #[reflect(ignore)]
     narrow_end: Option<Instant>,
     /// How far below the time budget the narrow phase aims (learnt from overruns).
     margin: Duration,

@@ -37,6 +37,7 @@ use std::time::Instant;
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::system::SystemParam;
+use bevy_reflect::prelude::*;
 use glam::Vec3;
 
 use super::components::{CollisionSensor, ObserveCollisions, TouchingEntities};
@@ -58,7 +59,8 @@ use crate::mesh::MeshError;
 /// (`Bounds`), or an exact pair's answer from memory under overload (`Coherence`, 0.5 when
 /// only the oriented boxes overlapped). Gameplay that must act on certain contacts only
 /// checks [`CollisionStarted::is_certain`].
-#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq)]
+#[derive(Message, EntityEvent, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub struct CollisionStarted {
     /// The first entity (the observed one for observer events).
     #[event_target]
@@ -84,7 +86,8 @@ impl CollisionStarted {
 
 /// Two entities stopped touching: written once at the end of each contact interval, also
 /// when one of them was despawned or became invalid. Same conventions as [`CollisionStarted`].
-#[derive(Message, EntityEvent, Clone, Copy, Debug, PartialEq)]
+#[derive(Message, EntityEvent, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub struct CollisionEnded {
     /// The first entity (the observed one for observer events).
     #[event_target]
@@ -100,7 +103,8 @@ pub struct CollisionEnded {
 
 /// One contact point of a colliding pair answered in this run (written only with
 /// [`CollisionConfig::contact_messages`](super::CollisionConfig::contact_messages)).
-#[derive(Message, Clone, Copy, Debug, PartialEq)]
+#[derive(Message, Reflect, Clone, Copy, Debug, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub struct Contact {
     /// First entity.
     pub a: Entity,
@@ -117,6 +121,7 @@ pub struct Contact {
     /// How the pair's answer was found.
     pub method: Method,
     /// The triangle pair (`a`'s, `b`'s) when the contact comes from one.
+    #[reflect(remote = super::reflect::OptionTrianglePairReflect)]
     pub triangles: Option<TrianglePair>,
     /// Priority for responses (higher first): the pair's priority, deeper contacts higher.
     pub priority: f32,
@@ -127,7 +132,8 @@ pub struct Contact {
 }
 
 /// Why an entity was skipped in a run.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[derive(Reflect, Debug, Clone, PartialEq, thiserror::Error)]
+#[reflect(opaque, Clone, Debug, PartialEq)]
 pub enum CollisionErrorKind {
     /// The pose has a NaN or infinite component, or a rotation far from unit length.
     #[error("invalid pose: translation {translation:?}, rotation {rotation:?}")]
@@ -151,7 +157,8 @@ pub enum CollisionErrorKind {
 
 /// An entity was skipped because its data is bad; the other entities go on. Written once when
 /// the entity becomes invalid (again after it recovered and broke again); its contacts end.
-#[derive(Message, Clone, Debug, PartialEq)]
+#[derive(Message, Reflect, Clone, Debug, PartialEq)]
+#[reflect(Clone, Debug, PartialEq)]
 pub struct CollisionError {
     /// The entity.
     pub entity: Entity,

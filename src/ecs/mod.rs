@@ -53,6 +53,7 @@ mod plugin;
 mod plugin_group;
 mod pool;
 mod prepare;
+mod reflect;
 mod response;
 mod schedule;
 mod stamp;
@@ -78,6 +79,10 @@ pub use plugin::StochasticCollisionPlugin;
 pub use plugin_group::StochasticCollisionPlugins;
 pub use pool::CollisionTaskPool;
 pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState, RemovedColliders};
+pub use reflect::{
+    DecisionReflect, OptionTrianglePairReflect, OrderReflect, PoseReflect, TrianglePairReflect,
+    register_response_types, register_types,
+};
 pub use response::{
     BodyMass, BodyVelocity, DEFAULT_STEP, ImpulseResponsePlugin, ImpulseSettings,
     PenaltyResponsePlugin, PenaltySettings, Rest, impulse_response, integrate_velocities,

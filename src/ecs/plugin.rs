@@ -101,6 +101,7 @@ impl Plugin for StochasticCollisionPlugin {
     fn build(&self, app: &mut App) {
         use CollisionSystems::*;
         let s = self.schedule;
+        super::reflect::register_types(app);
         app.add_message::<CollisionStarted>()
             .add_message::<CollisionEnded>()
             .add_message::<Contact>()

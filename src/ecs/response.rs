@@ -43,6 +43,7 @@ use bevy_app::prelude::*;
 use bevy_ecs::intern::Interned;
 use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
+use bevy_reflect::prelude::*;
 use glam::Vec3;
 
 use bevy_ecs::query::QueryItem;
@@ -55,7 +56,8 @@ use super::prepare::{Parents, Placement, shift};
 use super::schedule::{CollisionSchedule, CollisionSystems};
 
 /// Linear velocity of a simple rigid body (units per second).
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
 #[require(Rest)]
 pub struct BodyVelocity(pub Vec3);
 
@@ -63,7 +65,8 @@ pub struct BodyVelocity(pub Vec3);
 /// [`ImpulseSettings::sleep_speed`] for [`ImpulseSettings::sleep_frames`] runs falls asleep:
 /// it stops moving (so its pairs are not worked on: their answers stand) until an awake body
 /// hits it faster than [`ImpulseSettings::wake_speed`].
-#[derive(Component, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Component, Reflect, Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
 pub struct Rest {
     still_frames: u32,
     asleep: bool,
@@ -82,7 +85,8 @@ impl Rest {
 }
 
 /// BodyMass of a body with [`BodyVelocity`] (default 1).
-#[derive(Component, Debug, Clone, Copy, PartialEq)]
+#[derive(Component, Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
 pub struct BodyMass(pub f32);
 
 impl Default for BodyMass {
@@ -92,7 +96,8 @@ impl Default for BodyMass {
 }
 
 /// Settings of [`ImpulseResponsePlugin`] (a resource).
-#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+#[derive(Resource, Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Resource, Clone, Debug, Default, PartialEq)]
 pub struct ImpulseSettings {
     /// Gravity applied to bodies with [`BodyVelocity`].
     pub gravity: Vec3,
@@ -180,6 +185,7 @@ impl ImpulseResponsePlugin {
 impl Plugin for ImpulseResponsePlugin {
     fn build(&self, app: &mut App) {
         let schedule = response_schedule(app, self.schedule, "ImpulseResponsePlugin");
+        super::reflect::register_response_types(app);
         app.insert_resource(self.settings)
             .init_resource::<ContactQueue>()
             .add_systems(
@@ -367,7 +373,8 @@ fn resolve<'w>(
 }
 
 /// Settings of [`PenaltyResponsePlugin`] (a resource).
-#[derive(Resource, Debug, Clone, Copy, PartialEq)]
+#[derive(Resource, Reflect, Debug, Clone, Copy, PartialEq)]
+#[reflect(Resource, Clone, Debug, Default, PartialEq)]
 pub struct PenaltySettings {
     /// Fraction of the penetration corrected per run (a stiffness).
     pub stiffness: f32,
@@ -414,6 +421,7 @@ impl PenaltyResponsePlugin {
 impl Plugin for PenaltyResponsePlugin {
     fn build(&self, app: &mut App) {
         let schedule = response_schedule(app, self.schedule, "PenaltyResponsePlugin");
+        super::reflect::register_response_types(app);
         app.insert_resource(self.settings)
             .init_resource::<ContactQueue>()
             .add_systems(

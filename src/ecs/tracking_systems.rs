@@ -35,7 +35,8 @@ use crate::tracking::{Contact, TrackedSurface, Tracker, TrackerConfig};
 /// as of the last run: kept across runs, dropped with the entity. Inserted by the Tracking
 /// stage on both entities of each tracked pair, every partner listed, each pair as (this
 /// entity's triangle, the partner's).
-#[derive(Component, Debug, Clone, Default, PartialEq)]
+#[derive(Component, bevy_reflect::Reflect, Debug, Clone, Default, PartialEq)]
+#[reflect(opaque, Component, Clone, Debug, PartialEq)]
 pub struct FeaturePairs {
     /// Per partner entity, the triangle pairs (this entity's, the partner's) in contact.
     pub partners: SmallVec<[(Entity, Vec<TrianglePair>); 2]>,

@@ -5,7 +5,8 @@ use smallvec::SmallVec;
 use super::super::contact::ContactPoint;
 
 /// How a pair's answer was found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(bevy_reflect::Reflect, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[reflect(Clone, Debug, PartialEq, Hash)]
 pub enum Method {
     /// World boxes only.
     Bounds,
