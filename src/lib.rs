@@ -58,9 +58,10 @@ pub mod prelude {
     pub use crate::ecs::{
         BodyMass, BodyVelocity, ColliderPose, ColliderScale, CollisionConfig, CollisionDiagnostics,
         CollisionEnded, CollisionError, CollisionPairs, CollisionSensor, CollisionStarted,
-        CollisionSystems, Contact, ContactLayers, ContactQueue, Deformable, Fidelity, FrameBudget,
-        ImpulseResponsePlugin, MeshCollider, Method, ObserveCollisions, PenaltyResponsePlugin,
-        SelfCollision, StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
+        CollisionSystems, Contact, ContactLayer, ContactLayers, ContactQueue, Deformable, Fidelity,
+        FrameBudget, ImpulseResponsePlugin, MeshCollider, Method, ObserveCollisions, PairFilter,
+        PairFilterPlugin, PenaltyResponsePlugin, RefilterPairs, SelfCollision,
+        StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
     };
     pub use crate::geometry::{Aabb, Pose};
     pub use crate::mesh::{MeshError, Topology, TriMesh, generate};

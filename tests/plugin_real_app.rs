@@ -16,23 +16,6 @@ use plugin_support::*;
 use stochastic_collision::ecs::{ColliderTable, CollisionErrorKind, DEFAULT_STEP};
 use stochastic_collision::prelude::*;
 
-/// A game: time, transforms, the plugin in its default schedule, one fixed step per update.
-fn game() -> App {
-    let mut app = App::new();
-    app.add_plugins((
-        TimePlugin,
-        TransformPlugin,
-        StochasticCollisionPlugin::default().with_config(CollisionConfig {
-            budget: FrameBudget::Unlimited,
-            ..Default::default()
-        }),
-    ))
-    .insert_resource(TimeUpdateStrategy::FixedTimesteps(1))
-    .init_resource::<EventLog>()
-    .add_systems(Last, log_events);
-    app
-}
-
 fn placed(x: f32, y: f32, z: f32) -> Transform {
     Transform::from_xyz(x, y, z)
 }

@@ -18,9 +18,9 @@ use std::time::Instant;
 use bevy_ecs::prelude::*;
 use glam::Vec3;
 
-use super::components::ContactLayers;
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage};
+use super::layers::ContactLayers;
 use super::pairs::PairTable;
 use super::pool::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderTable};

@@ -218,54 +218,6 @@ impl Fidelity {
 #[reflect(Component, Clone, Debug, Default)]
 pub struct SelfCollision;
 
-/// Which entities collide with which: a pair is tested only if each entity's `memberships`
-/// share a bit with the other's `filters`. The default is all bits in both.
-///
-/// # Example
-/// ```
-/// use stochastic_collision::prelude::*;
-/// let debris = ContactLayers::new(0b01, 0b10); // member of layer 0, hits layer 1 only
-/// let ground = ContactLayers::new(0b10, 0b01);
-/// assert!(debris.interacts_with(&ground));
-/// assert!(!debris.interacts_with(&debris));
-/// ```
-#[derive(Component, Reflect, Clone, Copy, Debug, PartialEq, Eq)]
-#[reflect(Component, Clone, Debug, Default, PartialEq)]
-pub struct ContactLayers {
-    /// Layers this entity belongs to (bit mask).
-    pub memberships: u32,
-    /// Layers this entity collides with (bit mask).
-    pub filters: u32,
-}
-
-impl Default for ContactLayers {
-    fn default() -> Self {
-        Self::ALL
-    }
-}
-
-impl ContactLayers {
-    /// Member of every layer, colliding with every layer.
-    pub const ALL: Self = Self {
-        memberships: u32::MAX,
-        filters: u32::MAX,
-    };
-
-    /// Layers from masks.
-    pub const fn new(memberships: u32, filters: u32) -> Self {
-        Self {
-            memberships,
-            filters,
-        }
-    }
-
-    /// Whether a pair of entities with these layers is tested.
-    #[inline]
-    pub fn interacts_with(&self, other: &ContactLayers) -> bool {
-        self.memberships & other.filters != 0 && other.memberships & self.filters != 0
-    }
-}
-
 /// The entities this entity currently collides with (sorted), kept up to date by the Report
 /// stage. Inserted automatically with [`MeshCollider`] and [`Deformable`]; a mesh's own
 /// self-collision is not listed.

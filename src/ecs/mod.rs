@@ -20,7 +20,7 @@
 //!    with a [`CollisionError`] and skipped), world boxes.
 //! 2. **BroadPhase**: colliders whose world box left their broad-phase (fat) box, and only
 //!    they, get a new one; pairs are created and removed at that moment (sweep and prune over
-//!    the fat boxes, [`ContactLayers`] filtering).
+//!    the fat boxes, [`ContactLayers`] filtering, then the app's [`PairFilter`] if any).
 //! 3. **NarrowPhase**: the *active* pairs (of colliders that changed, new, or waiting for a
 //!    test), in parallel, by [`Fidelity`]: exact, ADB (cut by its share of the
 //!    [`FrameBudget`], priority by last confidence, closeness, speed and waiting) or bounds;
@@ -47,6 +47,7 @@ mod config;
 mod contact;
 mod diagnostics;
 mod events;
+mod layers;
 mod narrow_phase;
 mod pairs;
 mod plugin;
@@ -62,8 +63,8 @@ mod tracking_systems;
 pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{
-    ColliderPose, ColliderScale, CollisionSensor, ContactLayers, Deformable, Fidelity,
-    MeshCollider, ObserveCollisions, SelfCollision, TouchingEntities,
+    ColliderPose, ColliderScale, CollisionSensor, Deformable, Fidelity, MeshCollider,
+    ObserveCollisions, SelfCollision, TouchingEntities,
 };
 pub use config::{CollisionConfig, FrameBudget};
 pub use contact::ContactPoint;
@@ -73,8 +74,11 @@ pub use diagnostics::{CollisionCounters, CollisionDiagnostics, Stage, StageRecor
 pub use events::{
     CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact, ContactQueue,
 };
+pub use layers::{ContactLayer, ContactLayers};
 pub use narrow_phase::{Method, NarrowPhaseState, PairOutcome};
-pub use pairs::{CollisionPairs, PairTable, PairView};
+pub use pairs::{
+    CollisionPairs, PairFilter, PairFilterPlugin, PairTable, PairView, RefilterPairs, filter_pairs,
+};
 pub use plugin::StochasticCollisionPlugin;
 pub use plugin_group::StochasticCollisionPlugins;
 pub use pool::CollisionTaskPool;

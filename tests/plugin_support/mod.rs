@@ -79,3 +79,23 @@ pub fn spawn(app: &mut App, bundle: impl Bundle) -> Entity {
 pub fn pair(a: Entity, b: Entity) -> (Entity, Entity) {
     (a.min(b), a.max(b))
 }
+
+/// A game: bevy_time's `TimePlugin` and bevy_transform's `TransformPlugin`, the plugin in its
+/// default schedule without a budget, one fixed step per update (the first update of an app
+/// runs none), the log in `Last`.
+#[cfg(feature = "transform")]
+pub fn game() -> App {
+    let mut app = App::new();
+    app.add_plugins((
+        bevy_time::TimePlugin,
+        bevy_transform::TransformPlugin,
+        StochasticCollisionPlugin::default().with_config(CollisionConfig {
+            budget: FrameBudget::Unlimited,
+            ..Default::default()
+        }),
+    ))
+    .insert_resource(bevy_time::TimeUpdateStrategy::FixedTimesteps(1))
+    .init_resource::<EventLog>()
+    .add_systems(Last, log_events);
+    app
+}

@@ -278,7 +278,9 @@ fn activate(
     let mut pending = std::mem::take(&mut pairs.pending);
     let (boxes, now) = (colliders.boxes(), stamp(run));
     let check = |p: u32, e: &mut PairEnds, active: &mut Vec<u32>| {
-        if e.quiet && !boxes[e.body_a as usize].intersects(&boxes[e.body_b as usize]) {
+        if e.excluded {
+            // Rejected by the pair filter: never worked on.
+        } else if e.quiet && !boxes[e.body_a as usize].intersects(&boxes[e.body_b as usize]) {
             e.checked_run = now;
         } else if e.active_run != now {
             e.active_run = now;

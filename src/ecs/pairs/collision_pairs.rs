@@ -74,6 +74,7 @@ impl<'w> CollisionPairs<'w> {
             .get(entity)
             .into_iter()
             .flat_map(|e| e.pair_slots().iter())
+            .filter(|&&p| !self.pairs.ends(p).excluded)
             .map(move |&p| self.view(p, run))
     }
 
@@ -86,7 +87,7 @@ impl<'w> CollisionPairs<'w> {
     pub fn iter(&self) -> impl Iterator<Item = PairView<'_>> {
         let run = self.diagnostics.frame;
         (0..self.pairs.slots.len() as u32)
-            .filter(|&p| self.pairs.ends(p).live)
+            .filter(|&p| self.pairs.ends(p).live && !self.pairs.ends(p).excluded)
             .map(move |p| self.view(p, run))
     }
 

@@ -51,6 +51,9 @@ pub(crate) struct PairEnds {
     /// Answered, not colliding, of two colliders: while their world boxes stay apart,
     /// nothing about it needs work.
     pub quiet: bool,
+    /// Rejected by the app's [`PairFilter`](super::PairFilter): never worked on, never
+    /// touching, not listed by [`CollisionPairs`](super::CollisionPairs).
+    pub excluded: bool,
 }
 
 /// What planning reads of a pair.
@@ -111,6 +114,11 @@ pub struct PairTable {
     pub(crate) colliding: Vec<u32>,
     /// Touching states that flipped in this run, in the order found (the Report sorts them).
     pub(crate) transitions: Vec<Transition>,
+    /// Whether a [`PairFilter`](super::PairFilter) is installed: pairs created are then
+    /// listed in `created` for it.
+    pub(crate) filtering: bool,
+    /// Pairs of two colliders created since the filter last ran.
+    pub(crate) created: Vec<u32>,
 }
 
 impl PairTable {
@@ -195,6 +203,7 @@ impl PairTable {
             live: true,
             waiting: false,
             quiet: false,
+            excluded: false,
         };
         let hot = PairHot {
             touching: false,
@@ -215,8 +224,39 @@ impl PairTable {
             }
         };
         self.live += 1;
+        if self.filtering && a != b {
+            self.created.push(i);
+        }
         self.mark_pending(i, run);
         i
+    }
+
+    /// Excludes pair `i` (the pair filter rejected it): a touching pair's contact ends (a
+    /// transition), its answer and memory are forgotten, and it is not worked on until
+    /// [`include`](Self::include)d again.
+    pub(crate) fn exclude(&mut self, i: u32, run: u64) {
+        let e = &mut self.ends[i as usize];
+        if !e.live || e.excluded {
+            return;
+        }
+        e.excluded = true;
+        e.waiting = false;
+        e.quiet = false;
+        self.forget(i);
+        let s = &mut self.slots[i as usize];
+        s.outcome = PairOutcome::untested((s.a, s.b), run);
+        s.contact = None;
+        s.since = run;
+    }
+
+    /// Includes pair `i` again (the pair filter accepts it now): it is worked on in this
+    /// run's narrow phase, as a new pair.
+    pub(crate) fn include(&mut self, i: u32, run: u64) {
+        let e = &mut self.ends[i as usize];
+        if e.live && e.excluded {
+            e.excluded = false;
+            self.mark_pending(i, run);
+        }
     }
 
     /// Removes pair `i` (a touching pair's contact ends: a transition). The caller unlinks it
@@ -226,10 +266,16 @@ impl PairTable {
             return;
         }
         self.ends[i as usize] = PairEnds::default();
-        let h = &mut self.hot[i as usize];
-        let touching = h.touching;
-        *h = PairHot::default();
-        if touching {
+        self.forget(i);
+        self.live -= 1;
+        self.free.push(i);
+    }
+
+    /// Forgets pair `i`'s touching state and memory; a touching pair's contact ends (a
+    /// transition, found by bounds with probability 0).
+    fn forget(&mut self, i: u32) {
+        let h = std::mem::take(&mut self.hot[i as usize]);
+        if h.touching {
             let s = &self.slots[i as usize];
             self.transitions.push(Transition {
                 a: s.a,
@@ -239,8 +285,6 @@ impl PairTable {
                 probability: 0.0,
             });
         }
-        self.live -= 1;
-        self.free.push(i);
     }
 
     /// Puts pair `i` on the pending list (once per run): it is worked on in the next run.
@@ -257,7 +301,7 @@ impl PairTable {
     #[inline]
     pub(crate) fn wait(&mut self, i: u32) {
         let e = &mut self.ends[i as usize];
-        if e.live && !e.waiting {
+        if e.live && !e.waiting && !e.excluded {
             e.waiting = true;
             self.waiting.push_back(i);
         }
@@ -272,7 +316,7 @@ impl PairTable {
     #[inline]
     pub(crate) fn activate(&mut self, i: u32, run: u64) {
         let e = &mut self.ends[i as usize];
-        if e.active_run != stamp(run) && e.live {
+        if e.active_run != stamp(run) && e.live && !e.excluded {
             e.active_run = stamp(run);
             self.active.push(i);
         }
@@ -429,6 +473,35 @@ mod tests {
             assert!(t.transitions.is_empty(), "run {run}");
             assert_eq!(t.colliding, vec![i], "run {run}");
         }
+    }
+
+    #[test]
+    fn an_excluded_pair_ends_its_contact_and_is_never_worked_on() {
+        let mut t = PairTable {
+            filtering: true,
+            ..Default::default()
+        };
+        let (a, b) = entities();
+        let i = t.create((a, 0), (b, 1), 1);
+        assert_eq!(t.created, vec![i]);
+        t.answer(
+            i,
+            outcome(Method::Exact, true, 1),
+            Some(exact_memory(true, 1)),
+            1,
+        );
+        assert!(t.hot(i).touching);
+        t.begin_run(2);
+        t.exclude(i, 2);
+        assert!(!t.hot(i).touching && t.hot(i).memory.is_none());
+        assert_eq!(t.transitions.len(), 1);
+        assert!(!t.transitions[0].started);
+        t.wait(i);
+        t.activate(i, 2);
+        assert!(t.waiting.is_empty() && t.active.is_empty());
+        t.include(i, 3);
+        t.activate(i, 3);
+        assert_eq!(t.active, vec![i]);
     }
 
     #[test]

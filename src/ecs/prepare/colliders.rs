@@ -7,7 +7,8 @@ use bevy_ecs::prelude::*;
 use glam::{Vec3, Vec3A};
 use smallvec::SmallVec;
 
-use super::super::components::{ContactLayers, Fidelity};
+use super::super::components::Fidelity;
+use super::super::layers::ContactLayers;
 use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::adb::AdbTree;
 use crate::bvh::CollisionMesh;

@@ -37,11 +37,12 @@ use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;
 
 use super::components::{
-    ColliderPose, ColliderScale, ContactLayers, Deformable, Fidelity, MeshCollider, SelfCollision,
+    ColliderPose, ColliderScale, Deformable, Fidelity, MeshCollider, SelfCollision,
 };
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
 use super::events::{CollisionError, CollisionErrorKind};
+use super::layers::ContactLayers;
 use super::pool::CollisionTaskPool;
 use crate::bvh::CollisionMesh;
 use crate::geometry::Pose;
