@@ -40,6 +40,8 @@
 //! of the tables; with a [`FrameBudget::NodePairs`] budget (or none), a run gives the same
 //! events for any number of threads. A [`FrameBudget::Time`] budget adapts to the machine's
 //! speed, so its results depend on timing.
+#[cfg(feature = "bevy_mesh")]
+mod bevy_mesh;
 mod broad_phase;
 mod budget;
 mod components;
@@ -59,6 +61,11 @@ mod schedule;
 mod stamp;
 mod tracking_systems;
 
+#[cfg(feature = "bevy_mesh")]
+pub use bevy_mesh::{
+    BevyMeshError, MeshColliderCache, MeshColliderConstructor, MeshColliderConstructorHierarchy,
+    MeshColliderSystems, MeshNameFilter, trimesh_from_bevy_mesh,
+};
 pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{
