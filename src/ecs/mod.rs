@@ -11,6 +11,11 @@
 //! age through the [`CollisionPairs`] system parameter ([`Contact`] messages on request:
 //! [`CollisionConfig::contact_messages`]).
 //!
+//! With the `bevy_mesh` feature (on by default), colliders also come from bevy_mesh's `Mesh`
+//! assets: converted on the spot (`MeshCollider::from_bevy_mesh`), or built off the main
+//! thread for `Mesh3d` entities and whole scene hierarchies such as glTF scenes
+//! (`MeshColliderConstructor`, `MeshColliderConstructorHierarchy`).
+//!
 //! The plugin keeps its world between runs: a [`ColliderTable`] (one slot per collider) and a
 //! [`PairTable`] (one slot per pair of close colliders, with its last answer). A run works
 //! only on what changed, through the chained [`CollisionSystems`]:
