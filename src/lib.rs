@@ -55,6 +55,10 @@ pub mod prelude {
         Bvh, CollisionMesh, ExactOptions, ExactOutcome, MeshDistance, QueryWorkspace, TrianglePair,
         closest_points, intersecting_pairs, intersects, intersects_with, self_intersections,
     };
+    #[cfg(feature = "bevy_mesh")]
+    pub use crate::ecs::{
+        BevyMeshError, MeshColliderConstructor, MeshColliderConstructorHierarchy, MeshNameFilter,
+    };
     pub use crate::ecs::{
         BodyMass, BodyVelocity, ColliderPose, ColliderScale, CollisionConfig, CollisionDiagnostics,
         CollisionEnded, CollisionError, CollisionPairs, CollisionSensor, CollisionStarted,

@@ -153,6 +153,11 @@ pub enum CollisionErrorKind {
     /// A deformable mesh's new positions were rejected (for example a non-finite vertex).
     #[error("deformable mesh rejected: {0}")]
     Mesh(MeshError),
+    /// The entity's `Mesh3d` asset cannot be made into a collider (its
+    /// [`MeshColliderConstructor`](super::MeshColliderConstructor) is removed).
+    #[cfg(feature = "bevy_mesh")]
+    #[error("Mesh3d asset rejected: {0}")]
+    BevyMesh(super::BevyMeshError),
 }
 
 /// An entity was skipped because its data is bad; the other entities go on. Written once when

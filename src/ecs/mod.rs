@@ -11,6 +11,11 @@
 //! age through the [`CollisionPairs`] system parameter ([`Contact`] messages on request:
 //! [`CollisionConfig::contact_messages`]).
 //!
+//! With the `bevy_mesh` feature (on by default), colliders also come from bevy_mesh's `Mesh`
+//! assets: converted on the spot (`MeshCollider::from_bevy_mesh`), or built off the main
+//! thread for `Mesh3d` entities and whole scene hierarchies such as glTF scenes
+//! (`MeshColliderConstructor`, `MeshColliderConstructorHierarchy`).
+//!
 //! The plugin keeps its world between runs: a [`ColliderTable`] (one slot per collider) and a
 //! [`PairTable`] (one slot per pair of close colliders, with its last answer). A run works
 //! only on what changed, through the chained [`CollisionSystems`]:
@@ -40,6 +45,8 @@
 //! of the tables; with a [`FrameBudget::NodePairs`] budget (or none), a run gives the same
 //! events for any number of threads. A [`FrameBudget::Time`] budget adapts to the machine's
 //! speed, so its results depend on timing.
+#[cfg(feature = "bevy_mesh")]
+mod bevy_mesh;
 mod broad_phase;
 mod budget;
 mod components;
@@ -60,6 +67,11 @@ mod schedule;
 mod stamp;
 mod tracking_systems;
 
+#[cfg(feature = "bevy_mesh")]
+pub use bevy_mesh::{
+    BevyMeshError, MeshColliderCache, MeshColliderConstructor, MeshColliderConstructorHierarchy,
+    MeshColliderSystems, MeshNameFilter, trimesh_from_bevy_mesh,
+};
 pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{

@@ -155,5 +155,7 @@ impl Plugin for StochasticCollisionPlugin {
         );
         #[cfg(feature = "diagnostic")]
         super::diagnostics::store::register(app, s);
+        #[cfg(feature = "bevy_mesh")]
+        super::bevy_mesh::build(app);
     }
 }

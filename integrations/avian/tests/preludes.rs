@@ -56,6 +56,15 @@ type OursPlugin = (
     TouchingEntities,
 );
 
+/// The `bevy_mesh` feature's names (avian's are `ColliderConstructor` and
+/// `ColliderConstructorHierarchy`).
+type OursBevyMesh = (
+    BevyMeshError,
+    MeshColliderConstructor,
+    MeshColliderConstructorHierarchy,
+    MeshNameFilter,
+);
+
 /// Avian's names that ours were renamed away from, still avian's.
 type Theirs = (
     Collider,
@@ -64,6 +73,8 @@ type Theirs = (
     CollisionEventsEnabled,
     Sensor,
     Mass,
+    ColliderConstructor,
+    ColliderConstructorHierarchy,
     CollisionStart,
     CollisionEnd,
     LinearVelocity,
