@@ -30,9 +30,11 @@
 //! drawn for that frame.
 //!
 //! # Without a window
-//! The feature depends on bevy_gizmos alone (no renderer and no window): the lines are
-//! collected into bevy_gizmos' `GizmoAsset`s, which a headless app can read, and which Bevy's
-//! renderer (bevy_gizmos_render, in `DefaultPlugins`) draws when there is one.
+//! The feature depends on bevy_gizmos (and bevy_color and bevy_asset, which it uses), not on
+//! a renderer or a window (no bevy_render, no wgpu, no winit): the lines are collected into
+//! bevy_gizmos' `GizmoAsset`s, which a headless app can read, and which Bevy's gizmo renderer
+//! (bevy_gizmos_render's `GizmoRenderPlugin`, in `DefaultPlugins` with bevy_gizmos'
+//! `GizmoPlugin`) draws when there is one.
 mod config;
 mod draw;
 mod plugin;

@@ -20,8 +20,8 @@ use super::draw::{draw_collider_boxes, draw_contacts, draw_feature_pairs};
 /// a fixed step still shows the last run.
 ///
 /// Needs bevy_gizmos' `GizmoPlugin` (part of Bevy's `DefaultPlugins`; it uses bevy_asset's
-/// `AssetPlugin` but no window or renderer: drawing the lines on screen is the renderer's
-/// gizmo plugin's job) and [`StochasticCollisionPlugin`](super::super::StochasticCollisionPlugin)
+/// `AssetPlugin` but no window or renderer: drawing the lines on screen is the job of
+/// bevy_gizmos_render's `GizmoRenderPlugin`, also in `DefaultPlugins`) and [`StochasticCollisionPlugin`](super::super::StochasticCollisionPlugin)
 /// added before it.
 ///
 /// # Panics
