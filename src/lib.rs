@@ -67,6 +67,8 @@ pub mod prelude {
         PairFilterPlugin, PenaltyResponsePlugin, RefilterPairs, SelfCollision,
         StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
     };
+    #[cfg(feature = "debug_render")]
+    pub use crate::ecs::{CollisionDebugPlugin, CollisionGizmos};
     pub use crate::geometry::{Aabb, Pose};
     pub use crate::mesh::{MeshError, Topology, TriMesh, generate};
     pub use glam::{Quat, Vec3};

@@ -77,10 +77,7 @@ impl CollisionStarted {
     /// Whether the contact was found by an exact test (not estimated, guessed from boxes, or
     /// answered from memory).
     pub fn is_certain(&self) -> bool {
-        matches!(
-            self.method,
-            Method::Exact | Method::SelfCollision | Method::Tracking
-        ) && self.probability >= 1.0
+        self.method.is_certain(self.probability)
     }
 }
 

@@ -52,6 +52,8 @@ mod budget;
 mod components;
 mod config;
 mod contact;
+#[cfg(feature = "debug_render")]
+mod debug_render;
 mod diagnostics;
 mod events;
 mod layers;
@@ -80,6 +82,11 @@ pub use components::{
 };
 pub use config::{CollisionConfig, FrameBudget};
 pub use contact::ContactPoint;
+#[cfg(feature = "debug_render")]
+pub use debug_render::{
+    CollisionDebugPlugin, CollisionGizmos, NormalLength, draw_collider_boxes, draw_contacts,
+    draw_feature_pairs,
+};
 #[cfg(feature = "diagnostic")]
 pub use diagnostics::store as diagnostics_store;
 pub use diagnostics::{CollisionCounters, CollisionDiagnostics, Stage, StageRecord};

@@ -31,6 +31,18 @@ pub enum Method {
     Coherence,
 }
 
+impl Method {
+    /// Whether an answer found by this method with `probability` is certain: an exact test,
+    /// the Tracking stage or the self-collision pass, with probability 1 (not estimated,
+    /// guessed from boxes, answered from memory, or decayed since it was computed).
+    pub fn is_certain(self, probability: f64) -> bool {
+        matches!(
+            self,
+            Method::Exact | Method::SelfCollision | Method::Tracking
+        ) && probability >= 1.0
+    }
+}
+
 /// The answer for one pair.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PairOutcome {
