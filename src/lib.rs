@@ -34,13 +34,14 @@
 //! assert!(out.collides && out.probability > 0.5);
 //! ```
 //!
-//! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them, `adb` and `tracking` on
-//! top of `bvh`; `poses` and `deform` generate benchmark scenarios. None of them imports Bevy: the engine integration is
+//! Layers: `mesh` and `geometry` at the bottom, `bvh` on top of them, `adb`, `tracking` and
+//! `ccd` (continuous collision: the first time of impact within a step) on top of `bvh`; `poses` and `deform` generate benchmark scenarios. None of them imports Bevy: the engine integration is
 //! [`ecs`] alone ([`ecs::StochasticCollisionPlugin`], collision events, budgets, responses).
 #![warn(missing_docs)]
 
 pub mod adb;
 pub mod bvh;
+pub mod ccd;
 pub mod deform;
 pub mod ecs;
 pub mod geometry;

@@ -1,4 +1,6 @@
-use glam::{DQuat, DVec3, Quat, Vec3, Vec4};
+use glam::{DQuat, DVec3, Mat3, Quat, Vec3, Vec4};
+
+use super::Aabb;
 
 /// A rigid transform: a rotation followed by a translation (`p ↦ rotation * p + translation`).
 ///
@@ -82,6 +84,17 @@ impl Pose {
     #[inline]
     pub fn transform_vector(&self, v: Vec3) -> Vec3 {
         self.rotation * v
+    }
+
+    /// The box of `local`'s eight corners under this pose: the smallest world box that holds
+    /// `local` rotated and moved.
+    #[inline]
+    pub fn transform_aabb(&self, local: &Aabb) -> Aabb {
+        let m = Mat3::from_quat(self.rotation);
+        let abs = Mat3::from_cols(m.x_axis.abs(), m.y_axis.abs(), m.z_axis.abs());
+        let center = self.translation + m * local.center();
+        let half = abs * local.half_extents();
+        Aabb::new(center - half, center + half)
     }
 
     /// The inverse transform.

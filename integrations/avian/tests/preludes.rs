@@ -49,7 +49,9 @@ type OursPlugin = (
     MeshCollider,
     Method,
     ObserveCollisions,
+    PairFilterPlugin<AcceptAll>,
     PenaltyResponsePlugin,
+    RefilterPairs,
     SelfCollision,
     StochasticCollisionPlugin,
     StochasticCollisionPlugins,
@@ -64,6 +66,22 @@ type OursBevyMesh = (
     MeshColliderConstructorHierarchy,
     MeshNameFilter,
 );
+
+/// The `debug_render` feature's names (avian's are `PhysicsDebugPlugin` and
+/// `PhysicsGizmos`).
+type OursDebug = (CollisionDebugPlugin, CollisionGizmos);
+
+/// The traits of this crate's prelude (avian's are `PhysicsLayer` and `CollisionHooks`).
+fn our_traits<L: ContactLayer, F: PairFilter>() {}
+
+#[derive(bevy::ecs::system::SystemParam)]
+struct AcceptAll;
+
+impl PairFilter for AcceptAll {
+    fn test_pair(&self, _: Entity, _: Entity) -> bool {
+        true
+    }
+}
 
 /// Avian's names that ours were renamed away from, still avian's.
 type Theirs = (

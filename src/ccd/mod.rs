@@ -1,0 +1,26 @@
+//! Continuous collision detection: when, within a step, two moving meshes first touch, so that
+//! fast bodies never pass through thin ones unseen.
+//!
+//! - [`time_of_impact`]: two rigid meshes, each moving from one [`Pose`](crate::geometry::Pose)
+//!   to another over the step ([`RigidMotion`]: linear translation, rotation at a constant rate).
+//! - [`deforming_time_of_impact`]: two deforming meshes, each vertex moving linearly between
+//!   two states of the mesh.
+//! - [`vertex_face_time`] and [`edge_edge_time`]: one pair of features moving linearly, the
+//!   building block of both.
+//!
+//! Every pair of features whose swept boxes meet is decided by an inclusion-based root finder
+//! that never misses a root: the answer is never later than the first contact, and no earlier
+//! than the last moment the features were more than a stated distance tolerance apart (see
+//! [`CcdOptions`]). Both trees are descended together over the boxes their nodes sweep.
+mod inclusion;
+mod primitive;
+mod query;
+mod swept;
+
+pub use primitive::{
+    CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,
+};
+pub use query::{
+    CcdError, CcdOptions, CcdWorkspace, ImpactFeatures, RigidMotion, TimeOfImpact,
+    deforming_time_of_impact, time_of_impact,
+};

@@ -1,0 +1,346 @@
+//! Continuous collision: the first time of impact of two moving meshes against a brute-force
+//! reference (the discrete exact query on many sub-steps, the first hit refined by bisection),
+//! on tunnelling shots through thin walls, rotating bars, random rigid motions and a cloth
+//! falling through a ball; and hard cases (touching at the start, reaching contact exactly at
+//! the end, no motion, bad input).
+use glam::{Quat, Vec3};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, closest_points, intersects};
+use stochastic_collision::ccd::{
+    CcdError, CcdOptions, CcdWorkspace, RigidMotion, deforming_time_of_impact, time_of_impact,
+};
+use stochastic_collision::geometry::Pose;
+use stochastic_collision::mesh::generate;
+
+/// The first time the meshes intersect (the discrete exact query) on `steps` sub-steps, refined
+/// by bisection to 1e-7 between the last sub-step apart and the first one touching.
+fn reference_time(
+    a: &CollisionMesh,
+    ma: &RigidMotion,
+    b: &CollisionMesh,
+    mb: &RigidMotion,
+    steps: usize,
+) -> Option<f32> {
+    let mut ws = QueryWorkspace::new();
+    let mut hit = |t: f32| intersects(a, &ma.at(t), b, &mb.at(t), &mut ws);
+    let first = (0..=steps).find(|&k| hit(k as f32 / steps as f32))?;
+    if first == 0 {
+        return Some(0.0);
+    }
+    let (mut lo, mut hi) = (
+        (first - 1) as f32 / steps as f32,
+        first as f32 / steps as f32,
+    );
+    while hi - lo > 1e-7 {
+        let mid = 0.5 * (lo + hi);
+        if hit(mid) { hi = mid } else { lo = mid }
+    }
+    Some(hi)
+}
+
+/// Distance between the meshes at time `t`.
+fn distance_at(
+    a: &CollisionMesh,
+    ma: &RigidMotion,
+    b: &CollisionMesh,
+    mb: &RigidMotion,
+    t: f32,
+) -> f32 {
+    let mut ws = QueryWorkspace::new();
+    closest_points(a, &ma.at(t), b, &mb.at(t), f32::INFINITY, &mut ws).map_or(0.0, |d| d.distance)
+}
+
+fn toi(
+    a: &CollisionMesh,
+    ma: &RigidMotion,
+    b: &CollisionMesh,
+    mb: &RigidMotion,
+) -> Option<stochastic_collision::ccd::TimeOfImpact> {
+    time_of_impact(
+        a,
+        ma,
+        b,
+        mb,
+        &CcdOptions::default(),
+        &mut CcdWorkspace::new(),
+    )
+    .unwrap()
+}
+
+#[test]
+fn a_fast_ball_never_passes_through_a_thin_wall() {
+    let ball = CollisionMesh::new(generate::icosphere(0.5, 2));
+    // A tenth of the ball's diameter thick.
+    let wall = CollisionMesh::new(generate::cuboid(Vec3::new(0.05, 3.0, 3.0), 2));
+    let still = RigidMotion::still(Pose::IDENTITY);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(3);
+    let mut ws = QueryWorkspace::new();
+    for _ in 0..20 {
+        // From well left of the wall to well right of it in one step: both ends are apart.
+        let y = rng.random_range(-1.5..1.5f32);
+        let z = rng.random_range(-1.5..1.5f32);
+        let shot = RigidMotion::new(
+            Pose::from_translation(Vec3::new(-4.0, y, z)),
+            Pose::new(
+                Vec3::new(5.0, y + rng.random_range(-0.5..0.5), z),
+                Quat::from_rotation_z(rng.random_range(-1.0..1.0)),
+            ),
+        );
+        assert!(!intersects(
+            &ball,
+            &shot.start,
+            &wall,
+            &Pose::IDENTITY,
+            &mut ws
+        ));
+        assert!(!intersects(
+            &ball,
+            &shot.end,
+            &wall,
+            &Pose::IDENTITY,
+            &mut ws
+        ));
+        let hit = toi(&ball, &shot, &wall, &still).expect("the shot crosses the wall");
+        let reference = reference_time(&ball, &shot, &wall, &still, 2000).unwrap();
+        assert!(
+            hit.time <= reference + 1e-6,
+            "{} after {reference}",
+            hit.time
+        );
+        assert!(
+            hit.time >= reference - 1e-4,
+            "{} long before {reference}",
+            hit.time
+        );
+        assert!(
+            hit.normal.x < -0.5,
+            "normal {:?} from the wall towards the ball",
+            hit.normal
+        );
+        assert!(
+            (hit.point.x + 0.05).abs() < 0.02,
+            "{:?} on the wall's face",
+            hit.point
+        );
+    }
+}
+
+#[test]
+fn a_rotating_bar_sweeping_through_a_box_is_caught() {
+    // A bar 4 long turning 90° about z within the step; a small box on its path, at 45°,
+    // touched by neither end pose.
+    let bar = CollisionMesh::new(generate::cuboid(Vec3::new(2.0, 0.05, 0.05), 1));
+    let target = CollisionMesh::new(generate::cuboid(Vec3::splat(0.1), 1));
+    let at = Vec3::new(1.2, 1.2, 0.0);
+    let turn = RigidMotion::new(
+        Pose::IDENTITY,
+        Pose::new(Vec3::ZERO, Quat::from_rotation_z(1.5)),
+    );
+    let still = RigidMotion::still(Pose::from_translation(at));
+    let mut ws = QueryWorkspace::new();
+    assert!(!intersects(
+        &bar,
+        &turn.start,
+        &target,
+        &still.start,
+        &mut ws
+    ));
+    assert!(!intersects(&bar, &turn.end, &target, &still.start, &mut ws));
+    let hit = toi(&bar, &turn, &target, &still).expect("the bar hits the box");
+    let reference = reference_time(&bar, &turn, &target, &still, 2000).unwrap();
+    assert!(
+        hit.time <= reference + 1e-6 && hit.time >= reference - 1e-4,
+        "{} vs {reference}",
+        hit.time
+    );
+    // The box's corner facing the bar is hit first, a little before 45°.
+    assert!(reference < 0.5);
+}
+
+#[test]
+fn random_rigid_motions_agree_with_the_reference() {
+    let meshes = [
+        CollisionMesh::new(generate::icosphere(0.6, 1)),
+        CollisionMesh::new(generate::cuboid(Vec3::new(0.8, 0.3, 0.2), 1)),
+        CollisionMesh::new(generate::icosphere(0.3, 2)),
+    ];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(17);
+    let v3 = |rng: &mut Xoshiro256PlusPlus, s: f32| {
+        Vec3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
+    };
+    let (mut hits, mut misses, mut during) = (0, 0, 0);
+    for k in 0..240 {
+        let (a, b) = (&meshes[k % 3], &meshes[(k / 3) % 3]);
+        let rot = |rng: &mut Xoshiro256PlusPlus| {
+            Quat::from_axis_angle(
+                v3(rng, 1.0).normalize_or(Vec3::X),
+                rng.random_range(0.0..1.2),
+            )
+        };
+        let ma = RigidMotion::new(
+            Pose::new(v3(&mut rng, 2.0), rot(&mut rng)),
+            Pose::new(v3(&mut rng, 2.0), rot(&mut rng)),
+        );
+        let mb = RigidMotion::new(
+            Pose::new(v3(&mut rng, 1.0), rot(&mut rng)),
+            Pose::new(v3(&mut rng, 1.0), rot(&mut rng)),
+        );
+        let found = toi(a, &ma, b, &mb);
+        match (reference_time(a, &ma, b, &mb, 1000), found) {
+            (Some(reference), Some(hit)) => {
+                hits += 1;
+                during += (reference > 0.0) as usize;
+                assert!(
+                    hit.time <= reference + 1e-6,
+                    "case {k}: {} after {reference}",
+                    hit.time
+                );
+                assert!(
+                    hit.time >= reference - 1e-4 || distance_at(a, &ma, b, &mb, hit.time) < 1e-3,
+                    "case {k}: {} long before {reference}",
+                    hit.time
+                );
+            }
+            (Some(reference), None) => panic!("case {k}: missed the contact at {reference}"),
+            // The sub-steps can miss a graze: then the meshes must come within tolerance.
+            (None, Some(hit)) => {
+                assert!(
+                    distance_at(a, &ma, b, &mb, hit.time) < 1e-3,
+                    "case {k}: false contact {hit:?}"
+                );
+            }
+            (None, None) => misses += 1,
+        }
+    }
+    // Contacts that start during the step, not only poses that overlap at its start.
+    assert!(
+        hits > 40 && during > 20 && misses > 40,
+        "{hits} hits ({during} during the step), {misses} misses"
+    );
+}
+
+#[test]
+fn hard_cases_at_the_ends_of_the_step_and_without_motion() {
+    let cube = CollisionMesh::new(generate::cuboid(Vec3::splat(0.5), 0));
+    // Face to face, touching at the start and not moving: time 0.
+    let a = RigidMotion::still(Pose::IDENTITY);
+    let touching = RigidMotion::still(Pose::from_translation(Vec3::X));
+    assert_eq!(toi(&cube, &a, &cube, &touching).unwrap().time, 0.0);
+    // Apart and not moving: none.
+    let apart = RigidMotion::still(Pose::from_translation(Vec3::X * 1.001));
+    assert!(toi(&cube, &a, &cube, &apart).is_none());
+    // Reaching the face exactly at the end of the step: found, at the end.
+    let arriving = RigidMotion::new(
+        Pose::from_translation(Vec3::X * 2.0),
+        Pose::from_translation(Vec3::X),
+    );
+    let hit = toi(&cube, &a, &cube, &arriving).unwrap();
+    assert!(hit.time > 1.0 - 1e-4 && hit.time <= 1.0, "{}", hit.time);
+    assert!(hit.normal.x < -0.99, "{:?}", hit.normal);
+    // Sliding along each other's faces, in contact all the way: time 0.
+    let sliding = RigidMotion::new(
+        Pose::from_translation(Vec3::X),
+        Pose::from_translation(Vec3::new(1.0, 0.7, 0.0)),
+    );
+    assert_eq!(toi(&cube, &a, &cube, &sliding).unwrap().time, 0.0);
+}
+
+#[test]
+fn a_cloth_falling_through_a_ball_in_one_step_is_caught() {
+    let ball = CollisionMesh::new(generate::icosphere(0.5, 2));
+    let cloth_at = |y: f32| {
+        let mut m = generate::cloth_grid(3.0, 3.0, 12, 12);
+        let moved: Vec<Vec3> = m.positions().iter().map(|p| *p + Vec3::Y * y).collect();
+        m.set_positions(&moved).unwrap();
+        m
+    };
+    let start = CollisionMesh::new(cloth_at(1.0));
+    let mut end = start.clone();
+    end.set_positions(cloth_at(-1.0).positions()).unwrap();
+    let ball_end = ball.clone();
+    let hit = deforming_time_of_impact(
+        (&start, &end),
+        (&ball, &ball_end),
+        &CcdOptions::default(),
+        &mut CcdWorkspace::new(),
+    )
+    .unwrap()
+    .expect("the cloth hits the ball");
+    // Reference: the cloth's positions interpolated, the discrete query on sub-steps.
+    let mut ws = QueryWorkspace::new();
+    let mut sheet = start.clone();
+    let lerp = |t: f32| -> Vec<Vec3> {
+        start
+            .mesh()
+            .positions()
+            .iter()
+            .zip(end.mesh().positions())
+            .map(|(p, q)| p.lerp(*q, t))
+            .collect()
+    };
+    let steps = 2000;
+    let first = (0..=steps)
+        .find(|&k| {
+            sheet.set_positions(&lerp(k as f32 / steps as f32)).unwrap();
+            intersects(&sheet, &Pose::IDENTITY, &ball, &Pose::IDENTITY, &mut ws)
+        })
+        .unwrap();
+    let reference = first as f32 / steps as f32;
+    assert!(
+        hit.time <= reference + 1e-6,
+        "{} after {reference}",
+        hit.time
+    );
+    assert!(
+        hit.time >= reference - 1.0 / steps as f32 - 1e-4,
+        "{} before {reference}",
+        hit.time
+    );
+    // The sheet comes from above: the normal points up, from the ball towards the cloth.
+    assert!(hit.normal.y > 0.5, "{:?}", hit.normal);
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let ball = CollisionMesh::new(generate::icosphere(0.5, 1));
+    let bad = RigidMotion::new(
+        Pose::IDENTITY,
+        Pose::from_translation(Vec3::new(f32::NAN, 0.0, 0.0)),
+    );
+    let still = RigidMotion::still(Pose::IDENTITY);
+    let err = time_of_impact(
+        &ball,
+        &bad,
+        &ball,
+        &still,
+        &CcdOptions::default(),
+        &mut CcdWorkspace::new(),
+    );
+    assert!(
+        matches!(
+            err,
+            Err(CcdError::InvalidPose {
+                which: "first",
+                end: "end",
+                ..
+            })
+        ),
+        "{err:?}"
+    );
+    let other = CollisionMesh::new(generate::icosphere(0.5, 2));
+    let err = deforming_time_of_impact(
+        (&ball, &other),
+        (&ball, &ball),
+        &CcdOptions::default(),
+        &mut CcdWorkspace::new(),
+    );
+    assert!(
+        matches!(err, Err(CcdError::MismatchedStates { which: "first", .. })),
+        "{err:?}"
+    );
+}
