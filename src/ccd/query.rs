@@ -230,8 +230,19 @@ pub fn time_of_impact(
             .ceil()
             .min(options.max_pieces as f64) as u32
     };
+    // Pieces over which the meshes move about twice a leaf's size: each piece's swept boxes
+    // stay tight, and pieces are searched in time order, so the search ends at the first
+    // piece with a contact.
+    let travel = |mesh: &CollisionMesh, m: &RigidMotion| {
+        (m.end.translation - m.start.translation).length() as f64 + mesh_radius(mesh) * m.angle()
+    };
+    let leaf = leaf_size(a).min(leaf_size(b)).max(1e-30);
+    let by_travel = ((travel(a, motion_a) + travel(b, motion_b)) / (2.0 * leaf))
+        .ceil()
+        .min(options.max_pieces as f64) as u32;
     let pieces = pieces_for(a, motion_a)
         .max(pieces_for(b, motion_b))
+        .max(by_travel)
         .clamp(1, options.max_pieces.max(1));
     let stray = chord_deviation(mesh_radius(a), motion_a.angle() / pieces as f64)
         + chord_deviation(mesh_radius(b), motion_b.angle() / pieces as f64);
@@ -252,6 +263,14 @@ pub fn time_of_impact(
         }
     }
     Ok(None)
+}
+
+/// A typical leaf box's size: the root box's diagonal over the square root of the number of
+/// leaves (leaves tile a surface).
+fn leaf_size(mesh: &CollisionMesh) -> f64 {
+    let leaves = mesh.bvh().nodes().len().div_ceil(2).max(1) as f64;
+    let root = mesh.bvh().root_aabb();
+    (root.max - root.min).as_dvec3().length() / leaves.sqrt()
 }
 
 /// The first time of impact of two deforming meshes whose vertices move linearly from their
