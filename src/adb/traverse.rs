@@ -1,6 +1,6 @@
 //! The probability-guided, time-critical traversal of two ADB-trees.
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glam::Vec3;
 
@@ -9,57 +9,15 @@ use super::descent::{
 };
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
 use super::interior::{InteriorMap, Interpenetration, PairCrossing, PairLookup};
+use super::options::{
+    Budget, Decision, EVIDENCE_REDUNDANCY, FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order,
+    STRADDLE_FLOOR, UNESTIMATED,
+};
 use super::queue::{Entry, Queue};
 use super::tree::{AdbTree, nodes_overlap, overlap_distance, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
 use crate::geometry::Pose;
-
-/// When the traversal must stop, whatever it has found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Budget {
-    /// No limit: stop only on the `p_min`/`k_min` rule or an empty queue.
-    #[default]
-    Unlimited,
-    /// Stop once about this many node pairs have been visited (checked before each expansion,
-    /// which visits up to 4: at most 3 more; deterministic, run to run). The root pair is
-    /// always expanded.
-    NodePairs(u64),
-    /// Stop once this much time has passed since the query started (checked every
-    /// [`TIME_CHECK_INTERVAL`] queue pops, a leaf pair's exact triangle tests counting as pops
-    /// too, so the check costs nothing measurable and an exact leaf cannot hide a late clock).
-    Time(Duration),
-}
-
-/// How many disjoint node pairs of one contact region count as one independent piece of
-/// evidence in [`Decision::Confidence`] and [`Decision::Evidence`], and in the reported
-/// confidence ([`AdbOutcome::probability`]). Disjoint pairs of the same surfaces are correlated
-/// (neighbouring patches of one crossing), so counting each as fully independent would
-/// overstate the evidence. With 2, the `accuracy_vs_time` report's default and evidence rows
-/// make no error on any mesh, and with estimated leaves err on at most 2.1 % of the poses of
-/// any mesh (the README) while still stopping early, and the confidence of budgeted answers
-/// is calibrated (the report's reliability lines); with 1 (each pair independent) it was
-/// overstated, and the error under budgets higher.
-pub const EVIDENCE_REDUNDANCY: f64 = 2.0;
-
-/// Queue pops between two clock reads of a [`Budget::Time`] query.
-pub const TIME_CHECK_INTERVAL: u32 = 16;
-
-/// The probability of a queued pair not estimated yet ([`Order::Straddle`]).
-pub(super) const UNESTIMATED: f64 = -1.0;
-
-/// Queue pops before an [`Order::Straddle`] traversal first estimates its queued pairs and
-/// checks their evidence; the next checks come after twice as many pops each time, so the
-/// checks estimate a bounded share of the pairs. Measured when the order was introduced, by
-/// changing this value and timing the default query on the `accuracy_vs_time` poses
-/// (dragon_50k, small_intestine_100k, ogre, stanford-bunny, torus_32k): with 16 it took
-/// 0.9–1.2× the exact query's median, with 64 or 256 0.64–0.84× (most queries end on a
-/// triangle hit or an emptied queue before 64 pops), at the same errors.
-pub const FIRST_EVIDENCE_CHECK: u32 = 64;
-
-/// Highest probability an *estimate* may report: only an exact triangle test is certain, so
-/// with `p_min = 1` only exact hits count.
-pub const MAX_ESTIMATE: f64 = 1.0 - 1e-9;
 
 /// Parameters of [`adb_intersects`].
 #[derive(Debug, Clone)]
@@ -74,9 +32,8 @@ pub struct AdbQuery {
     /// and no overlapping pair is pruned for a zero estimate, so with `p_min = 1` and no budget
     /// the answer equals the exact query's. On by default: poses just short of contact are
     /// where estimates err (leaf pairs a hair apart look like colliding ones), and a leaf hit
-    /// ends a colliding query long before the estimates gather `k_min` pairs, so the default
-    /// is both faster and more accurate with it (the `accuracy_vs_time` report). Off, the
-    /// traversal never touches a triangle.
+    /// ends a colliding query without waiting for the estimates to gather `k_min` pairs. Off,
+    /// the traversal never touches a triangle.
     pub exact_leaves: bool,
     /// The probability model.
     pub estimator: Arc<dyn CollisionEstimator>,
@@ -109,103 +66,8 @@ pub struct AdbQuery {
     /// [exact](super::InteriorMap::is_exact) (an open mesh) the certificate's confidence is
     /// the map's measured [`certificate_confidence`](super::InteriorMap::certificate_confidence)
     /// and it counts only if that reaches `p_min`, so with `p_min = 1` the answer stays the
-    /// exact query's. `Some(0)` (before the traversal) by
-    /// default: on the `accuracy_vs_time` poses, trying it after 2 to 32 pops was slower at
-    /// every value (the pops cost the deep overlaps more than the certificate costs the rest).
+    /// exact query's. `Some(0)` (before the traversal) by default.
     pub interior_after: Option<u32>,
-}
-
-/// The order in which [`adb_intersects`] expands node pairs. Whichever the order, the frontier
-/// (every queued, leaf and pruned pair) covers all overlapping leaf pairs, the same rules
-/// decide, and ties are broken by node indices, so answers are deterministic. A pair's
-/// children are estimated when it is expanded, except in [`Order::Straddle`], which estimates
-/// them when its rules need their probabilities.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Order {
-    /// The papers' traversal: one max-heap of all queued pairs, the most probable expanded
-    /// next, wherever it is in the trees. Spreads over every likely region before it goes
-    /// deep: a collision near first contact, whose leaf pairs look less likely than the
-    /// shallower pairs around them, is reached only after all of those are expanded.
-    BestFirst,
-    /// The pairs that count as evidence ([`Decision`]: `p` at least the per-pair bar) first,
-    /// the most probable first, as in best first: their children often count too, so a deep
-    /// overlap gathers `k_min` pieces within a few levels. The other pairs depth first, the
-    /// most probable child of the pair just expanded first (a stack): a collision near first
-    /// contact reaches leaf pairs, and with exact leaves its first intersecting triangle pair,
-    /// after far fewer node pairs than best first.
-    EvidenceFirst,
-    /// Depth first: the most promising child pair of the pair just expanded next (a stack), a
-    /// child's promise being its probability `p` times [`STRADDLE_FLOOR`]` + s`, where `s` in
-    /// `[0, 1]` says how squarely each of the two boxes straddles the middle plane of the
-    /// other node's slab (the plane its surface lies near; 1 when both are centred on the
-    /// other's plane, 0 when either lies to one side). Surfaces cross only where each reaches
-    /// both sides of the other, so among equally probable children those that straddle hold
-    /// intersecting triangles more often. Pairs still count as evidence ([`Decision`]) as in
-    /// the other orders, but are not expanded ahead of the rest: on deep overlaps, expanding
-    /// every evidence pair first ([`Order::EvidenceFirst`]) spends node pairs that a dive to
-    /// the first intersecting triangle pair does not. On the `accuracy_vs_time` report's
-    /// colliding poses (closed meshes) it visits fewer node pairs than [`Order::EvidenceFirst`]
-    /// on every mesh, at the same or lower error (the README); on a flat cloth grid against
-    /// its copy the two are within a few per cent. It also visits fewer than
-    /// [`Order::Straddle`], but with every pair estimated takes longer.
-    DepthFirst,
-    /// Depth first like [`Order::DepthFirst`], the child pairs ranked by their straddle `s`
-    /// alone, and with exact leaves (no pruning, a disjoint-evidence [`Decision`]) a pair's
-    /// probability estimated only when it is needed: at the evidence checks (after
-    /// [`FIRST_EVIDENCE_CHECK`] pops, then after twice as many each time), for the pairs then
-    /// queued, and at the end of an answer the traversal did not settle (budget, evidence),
-    /// for the pairs left in its frontier. Most node pairs then cost a box test and no
-    /// estimate. The rules are those of the other orders (`k_min` disjoint frontier pairs at the
-    /// evidence bar mean "collision"; the confidence is the frontier's), checked less often:
-    /// an unbudgeted query ends on an exact triangle hit, an emptied queue or the evidence, as
-    /// before. With exact leaves, ranking the children by their estimates saves node pairs but
-    /// not time (the `accuracy_vs_time` report); without them, or with pruning, every pair is
-    /// estimated as in the other orders and only the ranking differs. The default: on the
-    /// `accuracy_vs_time` report's poses it takes about half the time of
-    /// [`Order::DepthFirst`] at the same or lower error, with or without a time budget (the
-    /// README).
-    #[default]
-    Straddle,
-}
-
-/// The weight of a child pair's probability that [`Order::DepthFirst`] keeps whatever its
-/// straddle (see there): small, so that straddling decides among similar probabilities, yet
-/// positive, so that a pair with no straddle is still ranked by its probability. Measured on
-/// the `accuracy_vs_time` poses' colliding ones (dragon_50k, small_intestine_100k, ogre), any
-/// value from 0 to 0.5 visits within a few per cent as many node pairs; 0.05 the fewest in
-/// total.
-pub const STRADDLE_FLOOR: f64 = 0.05;
-
-/// How [`adb_intersects`] turns pair probabilities into an answer.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Decision {
-    /// The papers' rule: every pair with `p ≥ p_min` counts, `k_min` of them mean
-    /// "collision"; an emptied queue means "no collision"; an exhausted budget means
-    /// "collision" if any pair counted.
-    Paper,
-    /// For calibrated estimators: `p_min` is the confidence the answer needs and `k_min` the
-    /// number of pieces of evidence. A pair counts while it is in the frontier (not yet replaced
-    /// by its children, so counted pairs are disjoint) with `p ≥ 1 − (1 − p_min)^(r/k_min)`,
-    /// `r` = [`EVIDENCE_REDUNDANCY`]: `k_min` such pairs, worth `k_min / r` independent ones,
-    /// together give at least `p_min` (0.60 per pair for the defaults 0.99 and 10).
-    /// Without `k_min` of them, "collision" iff the reported confidence
-    /// ([`AdbOutcome::probability`]) is at least [`AdbQuery::collide_at`] (½ by default). The
-    /// default.
-    #[default]
-    Confidence,
-    /// [`Decision::Confidence`], and besides: "collision" as soon as the pairs that count as
-    /// evidence together reach `p_min`, `r` of them counting as one independent piece as in
-    /// `Confidence` (`Σ −ln(1 − p) ≥ r · −ln(1 − p_min)`). `k_min` pairs at the threshold
-    /// carry that much (for `k_min ≥ r`) and the `k_min` rule still applies, so this never
-    /// stops later than `Confidence`, and earlier when fewer, more certain pairs carry the same
-    /// evidence. `k_min` only sets the bar a pair must reach to count, so a larger `k_min`
-    /// lets weaker pairs count (to never stop on evidence, use `Confidence` with a `k_min` no
-    /// traversal can reach). On the `accuracy_vs_time` report's poses, at the same error: with
-    /// estimated leaves up to 1.7× faster than `Confidence` (1.8× on one mesh, where it errs a
-    /// little more); with exact leaves as fast or up to 15 % slower (in the plugin's pile
-    /// scene within the noise), while an answer given on evidence has a contact region, not
-    /// the triangle pair of an exact leaf hit.
-    Evidence,
 }
 
 impl Default for AdbQuery {
@@ -276,10 +138,10 @@ pub struct AdbOutcome {
     /// Confidence that they collide, in `[0, 1]`: 1 for an exact hit, else
     /// `1 − (Π (1 − p))^(1/r)` over the traversal's final frontier (the pairs queued, and the
     /// leaf pairs and pruned pairs it did not expand), which together cover every overlapping
-    /// leaf pair, `r` = [`EVIDENCE_REDUNDANCY`] pairs counting as one independent piece; 0 when
+    /// leaf pair, `r` = 2 disjoint pairs counting as one independent piece; 0 when
     /// no pair was left (every overlapping pair was ruled out). With a calibrated estimator
-    /// it means what it says: of the answers given with confidence about `p`, about `p`
-    /// collide (the `accuracy_vs_time` report's reliability curve). Under
+    /// it is meant to mean what it says: of the answers given with confidence about `p`, about
+    /// `p` collide (the `accuracy_vs_time` report's reliability curves check it). Under
     /// [`Decision::Paper`] the answer follows the papers' rule, which ignores every pair below
     /// `p_min`: "no collision" may then come with a high confidence (the pairs below `p_min`
     /// together make a collision likely), and that disagreement is why that rule misses
