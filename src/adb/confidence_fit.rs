@@ -10,8 +10,9 @@
 //! node budgets. It applies to a tree queried against itself, the pairs it was fitted on;
 //! between different trees the frontier's confidence stands (what a failed certificate says
 //! depends on both meshes: against a thin wall, whose map has next to no inside, very little).
-use super::fit::{FitOptions, RAW_BINS, monotone_rates, raw_bin};
-use super::traverse::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
+use super::calibration::{ConfidenceCalibration, RAW_BINS, monotone_rates, raw_bin};
+use super::options::{Budget, FitOptions};
+use super::traverse::{AdbQuery, AdbWorkspace, adb_intersects};
 use super::tree::AdbTree;
 use crate::bvh::{QueryWorkspace, intersects};
 use crate::geometry::Pose;
@@ -22,16 +23,6 @@ const TRAINING_BUDGETS: [u64; 5] = [15, 30, 60, 120, 240];
 
 /// Training poses of the confidence fit per pose of the pair fit ([`FitOptions::poses`]).
 const POSES_PER_FIT_POSE: usize = 2;
-
-/// A fitted mapping from the frontier's confidence of an answer that a failed interpenetration
-/// certificate left unsettled to the frequency with which such answers collide (see the module
-/// documentation; monotone, with a Beta(½, ½) prior per bin). Stored in an [`AdbTree`] built
-/// with both a fit and an [`InteriorMap`](super::InteriorMap).
-#[derive(Debug, Clone, PartialEq)]
-pub struct ConfidenceCalibration {
-    table: [f32; RAW_BINS],
-    samples: usize,
-}
 
 impl ConfidenceCalibration {
     /// Fits the mapping on `tree` against copies of itself. `tree` must carry an interior map
@@ -68,27 +59,6 @@ impl ConfidenceCalibration {
                 samples += 1;
             }
         }
-        (samples > 0).then(|| Self {
-            table: monotone_rates(&cells),
-            samples,
-        })
-    }
-
-    /// The calibrated confidence of a raw frontier confidence (every bin has a value: the fit
-    /// keeps a calibration only when some answer was sampled, and empty bins take their
-    /// neighbours').
-    #[inline]
-    pub fn map(&self, raw: f64) -> f64 {
-        f64::from(self.table[raw_bin(raw.clamp(0.0, 1.0))])
-    }
-
-    /// The table: raw-confidence bin → frequency of collision.
-    pub fn table(&self) -> &[f32; RAW_BINS] {
-        &self.table
-    }
-
-    /// Training answers the fit learned from.
-    pub fn samples(&self) -> usize {
-        self.samples
+        (samples > 0).then(|| Self::new(monotone_rates(&cells), samples))
     }
 }

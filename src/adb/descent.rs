@@ -5,9 +5,9 @@
 //! stack push: this loop does only that, and hands everything else back to its caller.
 use std::time::Instant;
 
+use super::options::{Budget, TIME_CHECK_INTERVAL, UNESTIMATED};
 use super::queue::Entry;
 use super::sample_lookup::prefetch;
-use super::traverse::{Budget, TIME_CHECK_INTERVAL, UNESTIMATED};
 use super::tree::{AdbTree, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
@@ -226,8 +226,8 @@ pub(super) fn budget_spent(
 /// Asks for the children of node `i` of `tree` (their boxes and slabs) to be brought into the
 /// cache, for when the pair is expanded: on the largest meshes the nodes do not stay cached
 /// from one query to the next, and the next pair's loads would otherwise wait on memory.
-/// (In index order only: measured on ogre's non-colliding poses, about 3 % faster there, and
-/// slower in straddle order, where the extra loads sit on the path to the next pop.)
+/// (In index order only: in straddle order the extra loads would sit on the path to the next
+/// pop.)
 #[inline]
 fn prefetch_children(tree: &AdbTree, i: u32) {
     let nodes = tree.collision_mesh().bvh().nodes();

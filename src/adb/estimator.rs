@@ -1,5 +1,5 @@
 //! Pluggable estimators of the probability that two nodes contain intersecting triangles.
-use super::fit::Calibration;
+use super::calibration::{Calibration, DEPTH_BUCKETS};
 use super::probability::{
     DEFAULT_X_MAX, ModelBox, cell_counts, depth_lower_bound, overlap_volume_of,
 };
@@ -58,7 +58,8 @@ impl<'a> NodePair<'a> {
 /// Estimates the probability that two overlapping nodes contain intersecting triangles.
 ///
 /// Implementations must be deterministic and return a value in `[0, 1]`. The traversal calls
-/// this once per overlapping node pair, so it should cost tens of nanoseconds.
+/// this once per overlapping node pair it estimates, so it should be cheap (a few arithmetic
+/// operations and table lookups, like the estimators here).
 pub trait CollisionEstimator: Send + Sync + std::fmt::Debug {
     /// The probability for this pair.
     fn probability(&self, pair: &NodePair<'_>) -> f64;
@@ -173,4 +174,23 @@ impl CollisionEstimator for CalibratedEstimator {
     fn name(&self) -> &'static str {
         "calibrated"
     }
+}
+
+/// The calibration's query for a node pair (its depth bucket), beside [`NodePair`], which
+/// it reads.
+impl Calibration {
+    /// The calibrated probability of a raw estimate for this pair. Depth buckets the fit never
+    /// sampled (possible for pairs of two different trees) keep the raw estimate.
+    #[inline]
+    pub fn map(&self, pair: &NodePair<'_>, raw: f64) -> f64 {
+        self.lookup(bucket(pair), raw.clamp(0.0, 1.0))
+    }
+}
+
+/// The depth bucket of a pair: `(d_A + d_B) / (d_maxA + d_maxB)` in [`DEPTH_BUCKETS`] steps.
+#[inline]
+pub(super) fn bucket(pair: &NodePair<'_>) -> usize {
+    let total = (pair.max_depth_a + pair.max_depth_b).max(1) as f32;
+    let d = f32::from(pair.a.depth) + f32::from(pair.b.depth);
+    ((d / total * DEPTH_BUCKETS as f32) as usize).min(DEPTH_BUCKETS - 1)
 }

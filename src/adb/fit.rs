@@ -6,41 +6,14 @@ use std::sync::Arc;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
-use super::estimator::{CollisionEstimator, NodePair};
+use super::calibration::{Calibration, DEPTH_BUCKETS, RAW_BINS, monotone_rates, raw_bin};
+use super::estimator::{CollisionEstimator, NodePair, bucket};
+use super::options::FitOptions;
 use super::tree::{AdbTree, nodes_overlap, overlap_distance};
 use crate::bvh::QueryWorkspace;
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::traverse_pair::subtrees_intersect;
 use crate::poses::near_contact_poses;
-
-/// Depth buckets of the fitted table (by `(d_A + d_B) / (d_maxA + d_maxB)`).
-pub const DEPTH_BUCKETS: usize = 8;
-/// Bins of the base estimator's raw probability.
-pub const RAW_BINS: usize = 20;
-
-/// Options of [`FittedEstimator::fit`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct FitOptions {
-    /// Training poses (near first contact, seeded; never the poses you evaluate on).
-    pub poses: usize,
-    /// Random descents from the root pair per pose; every node pair on the way is a sample.
-    pub walks_per_pose: usize,
-    /// Offsets of the training poses from first contact, as a fraction of the size.
-    pub spread: f32,
-    /// Seed of the poses and walks.
-    pub seed: u64,
-}
-
-impl Default for FitOptions {
-    fn default() -> Self {
-        Self {
-            poses: 48,
-            walks_per_pose: 24,
-            spread: 0.15,
-            seed: 0xF17,
-        }
-    }
-}
 
 /// A base estimator whose raw output is mapped, per depth bucket, to the frequency with which
 /// node pairs of that raw estimate truly contain intersecting triangles, measured on the mesh
@@ -51,40 +24,6 @@ impl Default for FitOptions {
 pub struct FittedEstimator {
     base: Arc<dyn CollisionEstimator>,
     calibration: Calibration,
-}
-
-/// A fitted mapping from a raw estimate to a calibrated probability, per depth bucket
-/// (see [`FittedEstimator`]).
-#[derive(Debug, Clone, PartialEq)]
-pub struct Calibration {
-    table: [[f32; RAW_BINS]; DEPTH_BUCKETS],
-    samples: usize,
-}
-
-impl Calibration {
-    /// The calibrated probability of a raw estimate for this pair.
-    #[inline]
-    /// Depth buckets the fit never sampled (possible for pairs of two different trees) keep the
-    /// raw estimate.
-    pub fn map(&self, pair: &NodePair<'_>, raw: f64) -> f64 {
-        let raw = raw.clamp(0.0, 1.0);
-        let fitted = self.table[bucket(pair)][raw_bin(raw)];
-        if fitted.is_nan() {
-            raw
-        } else {
-            f64::from(fitted)
-        }
-    }
-
-    /// The table: `[depth bucket][raw-probability bin]` → probability (NaN: no samples).
-    pub fn table(&self) -> &[[f32; RAW_BINS]; DEPTH_BUCKETS] {
-        &self.table
-    }
-
-    /// Node pairs sampled by the fit.
-    pub fn samples(&self) -> usize {
-        self.samples
-    }
 }
 
 impl FittedEstimator {
@@ -158,7 +97,7 @@ impl FittedEstimator {
         }
         Self {
             base,
-            calibration: Calibration { table, samples },
+            calibration: Calibration::new(table, samples),
         }
     }
 
@@ -169,64 +108,13 @@ impl FittedEstimator {
 
     /// Node pairs sampled by the fit.
     pub fn samples(&self) -> usize {
-        self.calibration.samples
+        self.calibration.samples()
     }
 
     /// The mapping alone (to store in a tree).
     pub fn into_calibration(self) -> Calibration {
         self.calibration
     }
-}
-
-#[inline]
-fn bucket(pair: &NodePair<'_>) -> usize {
-    let total = (pair.max_depth_a + pair.max_depth_b).max(1) as f32;
-    let d = f32::from(pair.a.depth) + f32::from(pair.b.depth);
-    ((d / total * DEPTH_BUCKETS as f32) as usize).min(DEPTH_BUCKETS - 1)
-}
-
-#[inline]
-pub(super) fn raw_bin(raw: f64) -> usize {
-    ((raw * RAW_BINS as f64) as usize).min(RAW_BINS - 1)
-}
-
-/// Per-bin hit rates with a Beta(½, ½) prior, made non-decreasing by pooling adjacent
-/// violators (weighted by sample counts); empty bins take their neighbours' values.
-pub(super) fn monotone_rates(cells: &[(u32, u32); RAW_BINS]) -> [f32; RAW_BINS] {
-    // Blocks of (weight, rate, first bin, last bin) over the non-empty bins.
-    let mut blocks: Vec<(f64, f64, usize, usize)> = Vec::new();
-    for (i, &(n, hits)) in cells.iter().enumerate() {
-        if n == 0 {
-            continue;
-        }
-        let rate = (f64::from(hits) + 0.5) / (f64::from(n) + 1.0);
-        blocks.push((f64::from(n), rate, i, i));
-        while blocks.len() >= 2 && blocks[blocks.len() - 2].1 > blocks[blocks.len() - 1].1 {
-            let (w2, r2, _, e2) = blocks.pop().expect("two blocks");
-            let (w1, r1, s1, _) = blocks.pop().expect("two blocks");
-            blocks.push((w1 + w2, (w1 * r1 + w2 * r2) / (w1 + w2), s1, e2));
-        }
-    }
-    let mut out = [f32::NAN; RAW_BINS];
-    for &(_, rate, s, e) in &blocks {
-        for v in &mut out[s..=e] {
-            *v = rate as f32;
-        }
-    }
-    // Fill empty bins: from the left neighbour, else the right one. A row with no samples at
-    // all stays NaN, and `Calibration::map` then returns the raw estimate unchanged.
-    let Some(first) = out.iter().copied().find(|v| !v.is_nan()) else {
-        return out;
-    };
-    let mut last = first;
-    for v in &mut out {
-        if v.is_nan() {
-            *v = last;
-        } else {
-            last = *v;
-        }
-    }
-    out
 }
 
 impl CollisionEstimator for FittedEstimator {

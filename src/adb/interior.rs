@@ -40,11 +40,9 @@ use glam::Vec3;
 
 use super::clearance::Clearance;
 use super::ray_parity;
-use super::sample_lookup::Lookup;
-use super::surface_samples::SurfaceSamples;
+use super::surface_samples::{CERTIFY_CHUNK, SurfaceSamples};
 use super::voxel_grid::VoxelGrid;
 use crate::bvh::CollisionMesh;
-use crate::geometry::Pose;
 use crate::mesh::Topology;
 
 /// Class of a voxel in an [`InteriorMap`]: a triangle comes near it.
@@ -62,10 +60,6 @@ pub const MAX_SURFACE_SAMPLES: usize = 64 * CERTIFY_CHUNK;
 
 /// Most voxels [`Interpenetration::depth`] reaches in each direction.
 const MAX_DEPTH_STEPS: u32 = 64;
-
-/// Samples looked up between two checks of whether the certificate is found (a multiple of 4,
-/// at most 8: a chunk's 2-bit classes fill 16 bits).
-pub const CERTIFY_CHUNK: usize = 8;
 
 /// A voxel map of the inside and outside of a mesh, and the mesh's surface samples (see the
 /// module documentation). Built by [`InteriorMap::build`]; part of an
@@ -260,107 +254,6 @@ impl InteriorMap {
         (self.classes[i / 4] >> (2 * (i % 4))) & 0b11
     }
 
-    /// Looks this mesh's surface samples up in `other`'s map, `to_other` taking this mesh's
-    /// frame to `other`'s: `Some` once a sample lies inside `other` while a sample of the same
-    /// connected component lies outside it (then the surfaces cross: see the module
-    /// documentation). `None` if no sample pair shows it.
-    pub fn certify(&self, other: &InteriorMap, to_other: &Pose) -> Option<Interpenetration> {
-        match self.look_up(other, to_other) {
-            SampleLookup::Crossing(found) => Some(found),
-            SampleLookup::AllOutside | SampleLookup::Undecided => None,
-        }
-    }
-
-    /// [`InteriorMap::certify`], and when it finds nothing, whether no sample came into or near
-    /// `other` (then the surfaces are apart where the samples are, and looking the other way
-    /// round is unlikely to find a crossing). The samples that lead towards `other` (from this
-    /// mesh's box centre to `other`'s) are looked up first, then the ones spread over the
-    /// surface, then finer ones where those came into or near `other`.
-    pub fn look_up(&self, other: &InteriorMap, to_other: &Pose) -> SampleLookup {
-        let Some(mut lookup) = Lookup::new(self, other, to_other) else {
-            return SampleLookup::Undecided;
-        };
-        match lookup.support().or_else(|| lookup.spread()) {
-            Some(j) => SampleLookup::Crossing(lookup.crossing(j)),
-            None if !lookup.touched => SampleLookup::AllOutside,
-            None => SampleLookup::Undecided,
-        }
-    }
-
-    /// The certificate both ways between two meshes, `second_to_first` taking the second
-    /// mesh's frame to the first's: the samples each mesh leads with towards the other first
-    /// (where a collision begins and goes deepest), then the second mesh's samples spread over
-    /// its surface in the first's map, then, unless every one of those lay outside the first
-    /// mesh and away from its surface (a pose short of contact, almost always), the first's in
-    /// the second's. `None` if no sample pair shows a crossing.
-    ///
-    /// # Example
-    /// ```
-    /// use stochastic_collision::prelude::*;
-    /// use stochastic_collision::adb::{InteriorMap, PairCrossing};
-    /// let ball = CollisionMesh::new(generate::icosphere(1.0, 3));
-    /// let map = InteriorMap::build(&ball, 32, 64);
-    /// let deep = Pose::from_translation(Vec3::new(1.2, 0.0, 0.0));
-    /// assert!(matches!(
-    ///     InteriorMap::certify_pair(&map, &map, &deep),
-    ///     Some(PairCrossing::SecondInFirst(_) | PairCrossing::FirstInSecond(_))
-    /// ));
-    /// let apart = Pose::from_translation(Vec3::new(2.5, 0.0, 0.0));
-    /// assert_eq!(InteriorMap::certify_pair(&map, &map, &apart), None);
-    /// ```
-    pub fn certify_pair(
-        first: &InteriorMap,
-        second: &InteriorMap,
-        second_to_first: &Pose,
-    ) -> Option<PairCrossing> {
-        match Self::look_up_pair(first, second, second_to_first) {
-            PairLookup::Crossing(found) => Some(found),
-            PairLookup::Apart | PairLookup::Undecided => None,
-        }
-    }
-
-    /// [`InteriorMap::certify_pair`], and when it finds nothing, whether that is because the
-    /// second mesh's samples spread over its surface all lay outside the first mesh and away
-    /// from its surface ([`PairLookup::Apart`]: most often a pose short of contact).
-    pub fn look_up_pair(
-        first: &InteriorMap,
-        second: &InteriorMap,
-        second_to_first: &Pose,
-    ) -> PairLookup {
-        let mut second_in_first = Lookup::new(second, first, second_to_first);
-        let found_in_first = |l: &Lookup<'_>, j| PairCrossing::SecondInFirst(l.crossing(j));
-        let found_in_second = |l: &Lookup<'_>, j| PairCrossing::FirstInSecond(l.crossing(j));
-        if let Some(l) = &mut second_in_first
-            && let Some(j) = l.support()
-        {
-            return PairLookup::Crossing(found_in_first(l, j));
-        }
-        // Made only once the second mesh's leading samples have settled nothing.
-        let mut first_in_second = Lookup::new(first, second, &second_to_first.inverse());
-        if let Some(l) = &mut first_in_second
-            && let Some(j) = l.support()
-        {
-            return PairLookup::Crossing(found_in_second(l, j));
-        }
-        if let Some(l) = &mut second_in_first
-            && let Some(j) = l.spread()
-        {
-            return PairLookup::Crossing(found_in_first(l, j));
-        }
-        if second_in_first.as_ref().is_some_and(|l| !l.touched) {
-            // Every spread sample of the second mesh lay outside the first and away from its
-            // surface: most often a pose short of contact.
-            return PairLookup::Apart;
-        }
-        let Some(l) = first_in_second.as_mut() else {
-            return PairLookup::Undecided;
-        };
-        match l.spread() {
-            Some(j) => PairLookup::Crossing(found_in_second(l, j)),
-            None => PairLookup::Undecided,
-        }
-    }
-
     /// How far `p` (in this mesh's frame, in a voxel classified inside) is from the first voxel
     /// along one of the six axis directions that is not classified inside, from the centre of
     /// its voxel: at least half a voxel, at most [`MAX_DEPTH_STEPS`] voxels. One lookup in
@@ -377,10 +270,8 @@ impl InteriorMap {
     /// Per voxel, the steps along the nearest of the six axis directions to the first voxel
     /// beyond it that is not classified inside (or off the map), at most
     /// [`MAX_DEPTH_STEPS`]: two sweeps along every row of voxels per axis, so a
-    /// certificate's depth is one lookup. Searched at query time, six voxels per step in
-    /// scattered cache lines, it took about a sixth of a certified query's time (measured
-    /// during development on ogre's colliding `accuracy_vs_time` poses, certificates in a
-    /// tight loop: 0.92 µs each with the search, 0.75–0.81 µs with the table).
+    /// certificate's depth is one lookup instead of a search at query time (six voxels per step,
+    /// in scattered cache lines).
     fn build_depth_steps(&self) -> Vec<u8> {
         let dims = self.grid.dims.map(|d| d as usize);
         let voxels = self.grid.voxels();
@@ -417,9 +308,8 @@ pub enum PairLookup {
     /// The surfaces cross: a sample inside the other mesh and one of the same surface outside.
     Crossing(PairCrossing),
     /// No crossing, and the second mesh's spread samples all lay outside the first mesh and
-    /// away from its surface: most often a pose short of contact (measured during development
-    /// on ogre's `accuracy_vs_time` poses: 26 of the 184 such poses collide, by a part too thin
-    /// for the samples to land in).
+    /// away from its surface: most often a pose short of contact, though a part too thin for
+    /// the samples to land in may still collide.
     Apart,
     /// No crossing, and no sign either way (or nothing to look up).
     Undecided,

@@ -15,6 +15,8 @@
 //!   optional exact leaves; its [`AdbOutcome`] says whether the meshes collide, with what
 //!   confidence, whether the budget ran out, and where the contact probably is.
 
+mod build;
+mod calibration;
 pub mod cells;
 mod certificate_confidence;
 mod clearance;
@@ -23,6 +25,7 @@ mod descent;
 mod estimator;
 mod fit;
 mod interior;
+mod options;
 pub mod probability;
 mod queue;
 mod ray_parity;
@@ -34,19 +37,17 @@ mod tree;
 mod voxel_grid;
 mod voxel_map;
 
+pub use calibration::{Calibration, ConfidenceCalibration, DEPTH_BUCKETS, RAW_BINS};
 pub use certificate_confidence::CertificateReliability;
-pub use confidence_fit::ConfidenceCalibration;
 pub use estimator::{
     CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator, PlanarityEstimator,
     eq9_probability,
 };
-pub use fit::{Calibration, DEPTH_BUCKETS, FitOptions, FittedEstimator, RAW_BINS};
+pub use fit::FittedEstimator;
 pub use interior::{
-    CERTIFY_CHUNK, InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, PairLookup,
-    SampleLookup,
+    InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, PairLookup, SampleLookup,
 };
-pub use traverse::{
-    AdbOutcome, AdbQuery, AdbWorkspace, Budget, ContactWitness, Decision, EVIDENCE_REDUNDANCY,
-    FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order, STRADDLE_FLOOR, TIME_CHECK_INTERVAL, adb_intersects,
-};
-pub use tree::{AdbBuildOptions, AdbBuildProgress, AdbNode, AdbTree};
+pub use options::{AdbBuildOptions, Budget, Decision, FitOptions, Order};
+pub use surface_samples::CERTIFY_CHUNK;
+pub use traverse::{AdbOutcome, AdbQuery, AdbWorkspace, ContactWitness, adb_intersects};
+pub use tree::{AdbBuildProgress, AdbNode, AdbTree};

@@ -3,7 +3,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use super::traverse::Order;
+use super::options::Order;
 
 /// The pairs waiting to be expanded, in the query's [`Order`]: a max-heap, and a stack (for
 /// [`Order::EvidenceFirst`] the pairs below the evidence bar, for [`Order::DepthFirst`] and
@@ -70,7 +70,7 @@ impl Queue {
 /// A queued node pair, ordered by its rank, ties broken by node indices (deterministic).
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Entry {
-    /// The pair's probability ([`UNESTIMATED`](super::traverse::UNESTIMATED) if not estimated).
+    /// The pair's probability ([`UNESTIMATED`](super::options::UNESTIMATED) if not estimated).
     pub(super) p: f64,
     /// Its rank in the queue: the probability, or for [`Order::DepthFirst`] the probability
     /// weighted by how squarely the boxes straddle each other's surface, for

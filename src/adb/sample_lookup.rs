@@ -2,10 +2,117 @@
 //! interpenetration certificate ([`InteriorMap::certify_pair`], [`InteriorMap::look_up`]).
 use glam::Mat3;
 
-use super::interior::{CERTIFY_CHUNK, InteriorMap, Interpenetration, OUTSIDE};
-use super::surface_samples::{NO_COMPONENT, REFINEMENT, SurfaceSamples};
+use super::interior::{
+    InteriorMap, Interpenetration, OUTSIDE, PairCrossing, PairLookup, SampleLookup,
+};
+use super::surface_samples::{CERTIFY_CHUNK, NO_COMPONENT, REFINEMENT, SurfaceSamples};
 use super::voxel_map::VoxelMap;
 use crate::geometry::Pose;
+
+/// The interpenetration certificate's queries of an [`InteriorMap`] (the data and its build are
+/// in the map's own module).
+impl InteriorMap {
+    /// Looks this mesh's surface samples up in `other`'s map, `to_other` taking this mesh's
+    /// frame to `other`'s: `Some` once a sample lies inside `other` while a sample of the same
+    /// connected component lies outside it (then the surfaces cross: see the module
+    /// documentation). `None` if no sample pair shows it.
+    pub fn certify(&self, other: &InteriorMap, to_other: &Pose) -> Option<Interpenetration> {
+        match self.look_up(other, to_other) {
+            SampleLookup::Crossing(found) => Some(found),
+            SampleLookup::AllOutside | SampleLookup::Undecided => None,
+        }
+    }
+
+    /// [`InteriorMap::certify`], and when it finds nothing, whether no sample came into or near
+    /// `other` (then the surfaces are apart where the samples are, and looking the other way
+    /// round is unlikely to find a crossing). The samples that lead towards `other` (from this
+    /// mesh's box centre to `other`'s) are looked up first, then the ones spread over the
+    /// surface, then finer ones where those came into or near `other`.
+    pub fn look_up(&self, other: &InteriorMap, to_other: &Pose) -> SampleLookup {
+        let Some(mut lookup) = Lookup::new(self, other, to_other) else {
+            return SampleLookup::Undecided;
+        };
+        match lookup.support().or_else(|| lookup.spread()) {
+            Some(j) => SampleLookup::Crossing(lookup.crossing(j)),
+            None if !lookup.touched => SampleLookup::AllOutside,
+            None => SampleLookup::Undecided,
+        }
+    }
+
+    /// The certificate both ways between two meshes, `second_to_first` taking the second
+    /// mesh's frame to the first's: the samples each mesh leads with towards the other first
+    /// (where a collision begins and goes deepest), then the second mesh's samples spread over
+    /// its surface in the first's map, then, unless every one of those lay outside the first
+    /// mesh and away from its surface (a pose short of contact, almost always), the first's in
+    /// the second's. `None` if no sample pair shows a crossing.
+    ///
+    /// # Example
+    /// ```
+    /// use stochastic_collision::prelude::*;
+    /// use stochastic_collision::adb::{InteriorMap, PairCrossing};
+    /// let ball = CollisionMesh::new(generate::icosphere(1.0, 3));
+    /// let map = InteriorMap::build(&ball, 32, 64);
+    /// let deep = Pose::from_translation(Vec3::new(1.2, 0.0, 0.0));
+    /// assert!(matches!(
+    ///     InteriorMap::certify_pair(&map, &map, &deep),
+    ///     Some(PairCrossing::SecondInFirst(_) | PairCrossing::FirstInSecond(_))
+    /// ));
+    /// let apart = Pose::from_translation(Vec3::new(2.5, 0.0, 0.0));
+    /// assert_eq!(InteriorMap::certify_pair(&map, &map, &apart), None);
+    /// ```
+    pub fn certify_pair(
+        first: &InteriorMap,
+        second: &InteriorMap,
+        second_to_first: &Pose,
+    ) -> Option<PairCrossing> {
+        match Self::look_up_pair(first, second, second_to_first) {
+            PairLookup::Crossing(found) => Some(found),
+            PairLookup::Apart | PairLookup::Undecided => None,
+        }
+    }
+
+    /// [`InteriorMap::certify_pair`], and when it finds nothing, whether that is because the
+    /// second mesh's samples spread over its surface all lay outside the first mesh and away
+    /// from its surface ([`PairLookup::Apart`]: most often a pose short of contact).
+    pub fn look_up_pair(
+        first: &InteriorMap,
+        second: &InteriorMap,
+        second_to_first: &Pose,
+    ) -> PairLookup {
+        let mut second_in_first = Lookup::new(second, first, second_to_first);
+        let found_in_first = |l: &Lookup<'_>, j| PairCrossing::SecondInFirst(l.crossing(j));
+        let found_in_second = |l: &Lookup<'_>, j| PairCrossing::FirstInSecond(l.crossing(j));
+        if let Some(l) = &mut second_in_first
+            && let Some(j) = l.support()
+        {
+            return PairLookup::Crossing(found_in_first(l, j));
+        }
+        // Made only once the second mesh's leading samples have settled nothing.
+        let mut first_in_second = Lookup::new(first, second, &second_to_first.inverse());
+        if let Some(l) = &mut first_in_second
+            && let Some(j) = l.support()
+        {
+            return PairLookup::Crossing(found_in_second(l, j));
+        }
+        if let Some(l) = &mut second_in_first
+            && let Some(j) = l.spread()
+        {
+            return PairLookup::Crossing(found_in_first(l, j));
+        }
+        if second_in_first.as_ref().is_some_and(|l| !l.touched) {
+            // Every spread sample of the second mesh lay outside the first and away from its
+            // surface: most often a pose short of contact.
+            return PairLookup::Apart;
+        }
+        let Some(l) = first_in_second.as_mut() else {
+            return PairLookup::Undecided;
+        };
+        match l.spread() {
+            Some(j) => PairLookup::Crossing(found_in_second(l, j)),
+            None => PairLookup::Undecided,
+        }
+    }
+}
 
 /// One mesh's samples being looked up in another mesh's map, and what they showed so far.
 pub(super) struct Lookup<'a> {

@@ -3,8 +3,11 @@
 //! leads with when it moves that way (where a collision begins and goes deepest).
 use glam::Vec3;
 
-use super::interior::CERTIFY_CHUNK;
 use crate::bvh::{CollisionMesh, component_labels};
+
+/// Samples looked up between two checks of whether the certificate is found (a multiple of 4,
+/// at most 8: a chunk's 2-bit classes fill 16 bits).
+pub const CERTIFY_CHUNK: usize = 8;
 
 /// The component rank of samples whose component is not among the 63 largest: such samples
 /// never certify (components are tracked in a `u64`).

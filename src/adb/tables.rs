@@ -17,7 +17,7 @@ use super::probability::{self, CellCounts};
 ///
 /// Memory for `S` = `S_MAX`: `C(S+3, 3)` triples `s_A ≤ s_B ≤ s ≤ S`, times [`X_MAX`] `f32`s:
 /// 47 905 × 40 B = 1.92 MB for 64. (For comparison: 125 cells would take 13.7 MB, 216 cells
-/// 69 MB; larger grids use the direct path: about 90 ns per Eq. 9 call instead of 10–30 ns.)
+/// 69 MB; larger grids use the direct path, which evaluates Eq. 9 term by term.)
 pub const S_MAX: u32 = 64;
 
 /// Largest `x` held in the table: the papers' cap ([`probability::DEFAULT_X_MAX`]).

@@ -1,6 +1,7 @@
 //! The probability-guided, time-critical traversal of two ADB-trees.
+use std::cell::OnceCell;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Instant;
 
 use glam::Vec3;
 
@@ -9,57 +10,15 @@ use super::descent::{
 };
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
 use super::interior::{InteriorMap, Interpenetration, PairCrossing, PairLookup};
+use super::options::{
+    Budget, Decision, EVIDENCE_REDUNDANCY, FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order,
+    STRADDLE_FLOOR, UNESTIMATED,
+};
 use super::queue::{Entry, Queue};
 use super::tree::{AdbTree, nodes_overlap, overlap_distance, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
-use crate::geometry::Pose;
-
-/// When the traversal must stop, whatever it has found.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Budget {
-    /// No limit: stop only on the `p_min`/`k_min` rule or an empty queue.
-    #[default]
-    Unlimited,
-    /// Stop once about this many node pairs have been visited (checked before each expansion,
-    /// which visits up to 4: at most 3 more; deterministic, run to run). The root pair is
-    /// always expanded.
-    NodePairs(u64),
-    /// Stop once this much time has passed since the query started (checked every
-    /// [`TIME_CHECK_INTERVAL`] queue pops, a leaf pair's exact triangle tests counting as pops
-    /// too, so the check costs nothing measurable and an exact leaf cannot hide a late clock).
-    Time(Duration),
-}
-
-/// How many disjoint node pairs of one contact region count as one independent piece of
-/// evidence in [`Decision::Confidence`] and [`Decision::Evidence`], and in the reported
-/// confidence ([`AdbOutcome::probability`]). Disjoint pairs of the same surfaces are correlated
-/// (neighbouring patches of one crossing), so counting each as fully independent would
-/// overstate the evidence. With 2, the `accuracy_vs_time` report's default and evidence rows
-/// make no error on any mesh, and with estimated leaves err on at most 2.1 % of the poses of
-/// any mesh (the README) while still stopping early, and the confidence of budgeted answers
-/// is calibrated (the report's reliability lines); with 1 (each pair independent) it was
-/// overstated, and the error under budgets higher.
-pub const EVIDENCE_REDUNDANCY: f64 = 2.0;
-
-/// Queue pops between two clock reads of a [`Budget::Time`] query.
-pub const TIME_CHECK_INTERVAL: u32 = 16;
-
-/// The probability of a queued pair not estimated yet ([`Order::Straddle`]).
-pub(super) const UNESTIMATED: f64 = -1.0;
-
-/// Queue pops before an [`Order::Straddle`] traversal first estimates its queued pairs and
-/// checks their evidence; the next checks come after twice as many pops each time, so the
-/// checks estimate a bounded share of the pairs. Measured when the order was introduced, by
-/// changing this value and timing the default query on the `accuracy_vs_time` poses
-/// (dragon_50k, small_intestine_100k, ogre, stanford-bunny, torus_32k): with 16 it took
-/// 0.9–1.2× the exact query's median, with 64 or 256 0.64–0.84× (most queries end on a
-/// triangle hit or an emptied queue before 64 pops), at the same errors.
-pub const FIRST_EVIDENCE_CHECK: u32 = 64;
-
-/// Highest probability an *estimate* may report: only an exact triangle test is certain, so
-/// with `p_min = 1` only exact hits count.
-pub const MAX_ESTIMATE: f64 = 1.0 - 1e-9;
+use crate::geometry::{Pose, PoseF64};
 
 /// Parameters of [`adb_intersects`].
 #[derive(Debug, Clone)]
@@ -74,9 +33,8 @@ pub struct AdbQuery {
     /// and no overlapping pair is pruned for a zero estimate, so with `p_min = 1` and no budget
     /// the answer equals the exact query's. On by default: poses just short of contact are
     /// where estimates err (leaf pairs a hair apart look like colliding ones), and a leaf hit
-    /// ends a colliding query long before the estimates gather `k_min` pairs, so the default
-    /// is both faster and more accurate with it (the `accuracy_vs_time` report). Off, the
-    /// traversal never touches a triangle.
+    /// ends a colliding query without waiting for the estimates to gather `k_min` pairs. Off,
+    /// the traversal never touches a triangle.
     pub exact_leaves: bool,
     /// The probability model.
     pub estimator: Arc<dyn CollisionEstimator>,
@@ -109,103 +67,8 @@ pub struct AdbQuery {
     /// [exact](super::InteriorMap::is_exact) (an open mesh) the certificate's confidence is
     /// the map's measured [`certificate_confidence`](super::InteriorMap::certificate_confidence)
     /// and it counts only if that reaches `p_min`, so with `p_min = 1` the answer stays the
-    /// exact query's. `Some(0)` (before the traversal) by
-    /// default: on the `accuracy_vs_time` poses, trying it after 2 to 32 pops was slower at
-    /// every value (the pops cost the deep overlaps more than the certificate costs the rest).
+    /// exact query's. `Some(0)` (before the traversal) by default.
     pub interior_after: Option<u32>,
-}
-
-/// The order in which [`adb_intersects`] expands node pairs. Whichever the order, the frontier
-/// (every queued, leaf and pruned pair) covers all overlapping leaf pairs, the same rules
-/// decide, and ties are broken by node indices, so answers are deterministic. A pair's
-/// children are estimated when it is expanded, except in [`Order::Straddle`], which estimates
-/// them when its rules need their probabilities.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Order {
-    /// The papers' traversal: one max-heap of all queued pairs, the most probable expanded
-    /// next, wherever it is in the trees. Spreads over every likely region before it goes
-    /// deep: a collision near first contact, whose leaf pairs look less likely than the
-    /// shallower pairs around them, is reached only after all of those are expanded.
-    BestFirst,
-    /// The pairs that count as evidence ([`Decision`]: `p` at least the per-pair bar) first,
-    /// the most probable first, as in best first: their children often count too, so a deep
-    /// overlap gathers `k_min` pieces within a few levels. The other pairs depth first, the
-    /// most probable child of the pair just expanded first (a stack): a collision near first
-    /// contact reaches leaf pairs, and with exact leaves its first intersecting triangle pair,
-    /// after far fewer node pairs than best first.
-    EvidenceFirst,
-    /// Depth first: the most promising child pair of the pair just expanded next (a stack), a
-    /// child's promise being its probability `p` times [`STRADDLE_FLOOR`]` + s`, where `s` in
-    /// `[0, 1]` says how squarely each of the two boxes straddles the middle plane of the
-    /// other node's slab (the plane its surface lies near; 1 when both are centred on the
-    /// other's plane, 0 when either lies to one side). Surfaces cross only where each reaches
-    /// both sides of the other, so among equally probable children those that straddle hold
-    /// intersecting triangles more often. Pairs still count as evidence ([`Decision`]) as in
-    /// the other orders, but are not expanded ahead of the rest: on deep overlaps, expanding
-    /// every evidence pair first ([`Order::EvidenceFirst`]) spends node pairs that a dive to
-    /// the first intersecting triangle pair does not. On the `accuracy_vs_time` report's
-    /// colliding poses (closed meshes) it visits fewer node pairs than [`Order::EvidenceFirst`]
-    /// on every mesh, at the same or lower error (the README); on a flat cloth grid against
-    /// its copy the two are within a few per cent. It also visits fewer than
-    /// [`Order::Straddle`], but with every pair estimated takes longer.
-    DepthFirst,
-    /// Depth first like [`Order::DepthFirst`], the child pairs ranked by their straddle `s`
-    /// alone, and with exact leaves (no pruning, a disjoint-evidence [`Decision`]) a pair's
-    /// probability estimated only when it is needed: at the evidence checks (after
-    /// [`FIRST_EVIDENCE_CHECK`] pops, then after twice as many each time), for the pairs then
-    /// queued, and at the end of an answer the traversal did not settle (budget, evidence),
-    /// for the pairs left in its frontier. Most node pairs then cost a box test and no
-    /// estimate. The rules are those of the other orders (`k_min` disjoint frontier pairs at the
-    /// evidence bar mean "collision"; the confidence is the frontier's), checked less often:
-    /// an unbudgeted query ends on an exact triangle hit, an emptied queue or the evidence, as
-    /// before. With exact leaves, ranking the children by their estimates saves node pairs but
-    /// not time (the `accuracy_vs_time` report); without them, or with pruning, every pair is
-    /// estimated as in the other orders and only the ranking differs. The default: on the
-    /// `accuracy_vs_time` report's poses it takes about half the time of
-    /// [`Order::DepthFirst`] at the same or lower error, with or without a time budget (the
-    /// README).
-    #[default]
-    Straddle,
-}
-
-/// The weight of a child pair's probability that [`Order::DepthFirst`] keeps whatever its
-/// straddle (see there): small, so that straddling decides among similar probabilities, yet
-/// positive, so that a pair with no straddle is still ranked by its probability. Measured on
-/// the `accuracy_vs_time` poses' colliding ones (dragon_50k, small_intestine_100k, ogre), any
-/// value from 0 to 0.5 visits within a few per cent as many node pairs; 0.05 the fewest in
-/// total.
-pub const STRADDLE_FLOOR: f64 = 0.05;
-
-/// How [`adb_intersects`] turns pair probabilities into an answer.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Decision {
-    /// The papers' rule: every pair with `p ≥ p_min` counts, `k_min` of them mean
-    /// "collision"; an emptied queue means "no collision"; an exhausted budget means
-    /// "collision" if any pair counted.
-    Paper,
-    /// For calibrated estimators: `p_min` is the confidence the answer needs and `k_min` the
-    /// number of pieces of evidence. A pair counts while it is in the frontier (not yet replaced
-    /// by its children, so counted pairs are disjoint) with `p ≥ 1 − (1 − p_min)^(r/k_min)`,
-    /// `r` = [`EVIDENCE_REDUNDANCY`]: `k_min` such pairs, worth `k_min / r` independent ones,
-    /// together give at least `p_min` (0.60 per pair for the defaults 0.99 and 10).
-    /// Without `k_min` of them, "collision" iff the reported confidence
-    /// ([`AdbOutcome::probability`]) is at least [`AdbQuery::collide_at`] (½ by default). The
-    /// default.
-    #[default]
-    Confidence,
-    /// [`Decision::Confidence`], and besides: "collision" as soon as the pairs that count as
-    /// evidence together reach `p_min`, `r` of them counting as one independent piece as in
-    /// `Confidence` (`Σ −ln(1 − p) ≥ r · −ln(1 − p_min)`). `k_min` pairs at the threshold
-    /// carry that much (for `k_min ≥ r`) and the `k_min` rule still applies, so this never
-    /// stops later than `Confidence`, and earlier when fewer, more certain pairs carry the same
-    /// evidence. `k_min` only sets the bar a pair must reach to count, so a larger `k_min`
-    /// lets weaker pairs count (to never stop on evidence, use `Confidence` with a `k_min` no
-    /// traversal can reach). On the `accuracy_vs_time` report's poses, at the same error: with
-    /// estimated leaves up to 1.7× faster than `Confidence` (1.8× on one mesh, where it errs a
-    /// little more); with exact leaves as fast or up to 15 % slower (in the plugin's pile
-    /// scene within the noise), while an answer given on evidence has a contact region, not
-    /// the triangle pair of an exact leaf hit.
-    Evidence,
 }
 
 impl Default for AdbQuery {
@@ -276,10 +139,10 @@ pub struct AdbOutcome {
     /// Confidence that they collide, in `[0, 1]`: 1 for an exact hit, else
     /// `1 − (Π (1 − p))^(1/r)` over the traversal's final frontier (the pairs queued, and the
     /// leaf pairs and pruned pairs it did not expand), which together cover every overlapping
-    /// leaf pair, `r` = [`EVIDENCE_REDUNDANCY`] pairs counting as one independent piece; 0 when
+    /// leaf pair, `r` = 2 disjoint pairs counting as one independent piece; 0 when
     /// no pair was left (every overlapping pair was ruled out). With a calibrated estimator
-    /// it means what it says: of the answers given with confidence about `p`, about `p`
-    /// collide (the `accuracy_vs_time` report's reliability curve). Under
+    /// it is meant to mean what it says: of the answers given with confidence about `p`, about
+    /// `p` collide (the `accuracy_vs_time` report's reliability curves check it). Under
     /// [`Decision::Paper`] the answer follows the papers' rule, which ignores every pair below
     /// `p_min`: "no collision" may then come with a high confidence (the pairs below `p_min`
     /// together make a collision likely), and that disagreement is why that rule misses
@@ -370,33 +233,170 @@ pub fn adb_intersects(
     if root_spheres_apart(a, b, &rel) {
         return out;
     }
-    // Whether the interpenetration certificate was tried and settled nothing.
-    let mut interior_failed = false;
     // The certificate comes first by default, before anything the traversal needs is set up:
     // a certified answer costs the certificate alone. (A sample it finds inside the other mesh
     // lies in both root boxes, so it never certifies a pose whose root boxes are apart.)
-    // Whether it found the pose probably apart ([`PairLookup::Apart`]).
-    let mut apart = false;
+    // `Some(apart)` when it was tried and settled nothing, `apart` when it found the pose
+    // probably apart ([`PairLookup::Apart`]).
+    let mut failed = None;
     if query.interior_after == Some(0) {
         match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
             Certificate::Settled => return out,
-            Certificate::Failed { apart: far } => (interior_failed, apart) = (true, far),
+            Certificate::Failed { apart } => failed = Some(apart),
             Certificate::Unavailable => {}
         }
     }
-    let (ma, mb) = (a.collision_mesh(), b.collision_mesh());
-    let (na, nb) = (ma.bvh().nodes(), mb.bvh().nodes());
-    let frame = RelativeFrame::new(&rel, ma.bvh(), mb.bvh());
+    let frame = RelativeFrame::new(&rel, a.collision_mesh().bvh(), b.collision_mesh().bvh());
     if !nodes_overlap(a, b, &frame, 0, 0) {
         return out;
     }
-    let rel64 = rel.to_f64();
-    let witness = |ia: u32, ib: u32, triangles: Option<TrianglePair>| {
+    let scene = Scene::new((a, pose_a), (b, pose_b), rel, frame, query, start);
+    let found = Found {
+        out,
+        evidence: 0.0,
+        frontier_log_miss: 0.0,
+        region: (Vec3::ZERO, Vec3::ZERO, 0.0),
+        best: None,
+        interior_failed: failed.is_some(),
+    };
+    Traversal { scene, found }.run(ws, failed == Some(true))
+}
+
+/// What one query's traversal reads and never changes: the two trees placed, the query, and
+/// the rules derived from it.
+struct Scene<'q> {
+    a: &'q AdbTree,
+    b: &'q AdbTree,
+    pose_a: &'q Pose,
+    pose_b: &'q Pose,
+    /// The second tree's frame to the first's.
+    rel: Pose,
+    frame: RelativeFrame,
+    rel64: PoseF64,
+    query: &'q AdbQuery,
+    /// When the query began (read only for a time budget).
+    start: Option<Instant>,
+    /// Which pairs count toward k_min: the papers count every pair with p ≥ p_min; the
+    /// confidence decision counts disjoint frontier pairs with p ≥ 1 − (1 − p_min)^(r/k_min),
+    /// so that k_min of them, worth k_min/r independent pieces of evidence, reach p_min.
+    disjoint_evidence: bool,
+    /// `Decision::Evidence` needs the evidence sum; the other rules only count pairs.
+    count_evidence: bool,
+    /// What the evidence `Σ −ln(1 − p)` must reach for `Decision::Evidence` to stop.
+    evidence_needed: f64,
+    /// Worked out when first needed (a `powf`): an answer that leaves no queued pair to weigh
+    /// (most non-colliding ones) never needs it.
+    pair_threshold: OnceCell<f64>,
+    /// Estimate a pair only when its estimate is needed: with exact leaves, no pruning and
+    /// disjoint evidence, a `Straddle` traversal needs the probabilities of its queued pairs
+    /// only at its evidence checks and for the confidence of an answer it did not settle.
+    on_demand: bool,
+}
+
+/// What the traversal has found so far: the outcome being written, and the frontier's sums.
+struct Found {
+    out: AdbOutcome,
+    /// Σ −ln(1 − p) over the frontier pairs that count as evidence (`Decision::Evidence`).
+    evidence: f64,
+    /// Σ ln(1 − p) over the pairs left in the frontier for good (leaf pairs not tested, pruned
+    /// pairs); with the queued pairs, the frontier covers every overlapping leaf pair. Under
+    /// independence, the probability that no pair collides is exp(Σ ln(1 − p)) over all of it.
+    frontier_log_miss: f64,
+    /// Σ p·point, Σ p·normal, Σ p over the leaf pairs left in the frontier: the contact region.
+    region: (Vec3, Vec3, f64),
+    /// The most probable pair, probabilities compared in steps of 1/20 and ties going to the
+    /// deeper pair (whose boxes localise the contact better).
+    best: Option<((u32, u32), u32, u32)>,
+    /// Whether the interpenetration certificate was tried and settled nothing.
+    interior_failed: bool,
+}
+
+/// One query's traversal: [`Traversal::descend`] (the default order's lean loop, in
+/// [`super::descent`]) or [`Traversal::expand`] (the other orders), both ending in the same
+/// hit, budget and certificate handling ([`Found`]), then [`Traversal::finish`].
+struct Traversal<'q> {
+    scene: Scene<'q>,
+    found: Found,
+}
+
+impl<'q> Scene<'q> {
+    fn new(
+        (a, pose_a): (&'q AdbTree, &'q Pose),
+        (b, pose_b): (&'q AdbTree, &'q Pose),
+        rel: Pose,
+        frame: RelativeFrame,
+        query: &'q AdbQuery,
+        start: Option<Instant>,
+    ) -> Self {
+        let disjoint_evidence = query.decision != Decision::Paper;
+        Self {
+            a,
+            b,
+            pose_a,
+            pose_b,
+            rel,
+            frame,
+            rel64: rel.to_f64(),
+            query,
+            start,
+            disjoint_evidence,
+            count_evidence: query.decision == Decision::Evidence,
+            evidence_needed: match query.decision {
+                Decision::Evidence => {
+                    -(1.0 - query.p_min.clamp(0.0, MAX_ESTIMATE)).ln() * EVIDENCE_REDUNDANCY
+                }
+                _ => f64::INFINITY,
+            },
+            pair_threshold: OnceCell::new(),
+            on_demand: query.order == Order::Straddle
+                && query.exact_leaves
+                && query.p_prune <= 0.0
+                && disjoint_evidence,
+        }
+    }
+
+    /// The probability a pair needs to count as evidence.
+    fn pair_threshold(&self) -> f64 {
+        *self.pair_threshold.get_or_init(|| {
+            if self.disjoint_evidence {
+                let independent = f64::from(self.query.k_min.max(1)) / EVIDENCE_REDUNDANCY;
+                1.0 - (1.0 - self.query.p_min.clamp(0.0, 1.0)).powf(1.0 / independent.max(1.0))
+            } else {
+                self.query.p_min
+            }
+        })
+    }
+
+    /// The estimate of nodes `ia`, `ib` whose boxes' centres are `center_distance` apart.
+    #[inline]
+    fn estimate(&self, ia: u32, ib: u32, center_distance: f32) -> f64 {
+        let pair = NodePair::at_distance(self.a, self.b, center_distance, ia, ib, true);
+        let p = self.query.estimator.probability(&pair);
+        // A NaN from a custom estimator counts as 0 rather than poisoning the confidence.
+        if p.is_nan() {
+            0.0
+        } else {
+            p.clamp(0.0, MAX_ESTIMATE)
+        }
+    }
+
+    /// The contact witness of nodes `ia`, `ib` (between their box centres).
+    fn witness(&self, ia: u32, ib: u32, triangles: Option<TrianglePair>) -> ContactWitness {
+        let (na, nb) = (
+            self.a.collision_mesh().bvh().nodes(),
+            self.b.collision_mesh().bvh().nodes(),
+        );
         let (x, y) = (&na[ia as usize], &nb[ib as usize]);
-        let ca = pose_a.transform_point(x.aabb().center());
-        let cb = pose_a.transform_point(frame.transform_point(y.aabb().center()));
-        let n = pose_a.transform_vector(a.nodes()[ia as usize].normal)
-            - pose_b.transform_vector(b.nodes()[ib as usize].normal);
+        let ca = self.pose_a.transform_point(x.aabb().center());
+        let cb = self
+            .pose_a
+            .transform_point(self.frame.transform_point(y.aabb().center()));
+        let n = self
+            .pose_a
+            .transform_vector(self.a.nodes()[ia as usize].normal)
+            - self
+                .pose_b
+                .transform_vector(self.b.nodes()[ib as usize].normal);
         let normal = n
             .try_normalize()
             .or_else(|| (cb - ca).try_normalize())
@@ -407,139 +407,130 @@ pub fn adb_intersects(
             nodes: (ia, ib),
             triangles,
         }
-    };
-    let node_pair = |ia: u32, ib: u32, center_distance: f32| {
-        NodePair::at_distance(a, b, center_distance, ia, ib, true)
-    };
-    let estimate = |pair: &NodePair<'_>| {
-        let p = query.estimator.probability(pair);
-        // A NaN from a custom estimator counts as 0 rather than poisoning the confidence.
-        if p.is_nan() {
-            0.0
-        } else {
-            p.clamp(0.0, MAX_ESTIMATE)
+    }
+}
+
+impl Found {
+    /// Records a pair's estimate `p` in the highest probability seen and the most probable pair.
+    #[inline]
+    fn note_estimate(&mut self, s: &Scene<'_>, p: f64, ia: u32, ib: u32) {
+        self.out.max_pair_probability = self.out.max_pair_probability.max(p);
+        let depth =
+            u32::from(s.a.nodes()[ia as usize].depth) + u32::from(s.b.nodes()[ib as usize].depth);
+        let key = ((p * 20.0) as u32, depth);
+        if p > 0.0 && self.best.is_none_or(|(k, _, _)| key > k) {
+            self.best = Some((key, ia, ib));
         }
-    };
-    // Which pairs count toward k_min: the papers count every pair with p ≥ p_min; the
-    // confidence decision counts disjoint frontier pairs with p ≥ 1 − (1 − p_min)^(r/k_min),
-    // so that k_min of them, worth k_min/r independent pieces of evidence, reach p_min.
-    let disjoint_evidence = query.decision != Decision::Paper;
-    // Σ −ln(1 − p) over the frontier pairs that count as evidence, and what it must reach for
-    // `Decision::Evidence` to stop.
-    let mut evidence = 0.0f64;
-    let evidence_needed = match query.decision {
-        Decision::Evidence => {
-            -(1.0 - query.p_min.clamp(0.0, MAX_ESTIMATE)).ln() * EVIDENCE_REDUNDANCY
-        }
-        _ => f64::INFINITY,
-    };
-    // Worked out when first needed (a `powf`): an answer that leaves no queued pair to weigh
-    // (most non-colliding ones) never needs it.
-    let pair_threshold_cell = std::cell::OnceCell::new();
-    let pair_threshold = || {
-        *pair_threshold_cell.get_or_init(|| {
-            if disjoint_evidence {
-                let independent = f64::from(query.k_min.max(1)) / EVIDENCE_REDUNDANCY;
-                1.0 - (1.0 - query.p_min.clamp(0.0, 1.0)).powf(1.0 / independent.max(1.0))
-            } else {
-                query.p_min
-            }
-        })
-    };
-    // Estimate a pair only when its estimate is needed: with exact leaves, no pruning and
-    // disjoint evidence, a `Straddle` traversal needs the probabilities of its queued pairs
-    // only at its evidence checks and for the confidence of an answer it did not settle.
-    let on_demand = query.order == Order::Straddle
-        && query.exact_leaves
-        && query.p_prune <= 0.0
-        && disjoint_evidence;
-    // Σ ln(1 − p) over the pairs left in the frontier for good (leaf pairs not tested, pruned
-    // pairs); with the queued pairs, the frontier covers every overlapping leaf pair. Under
-    // independence, the probability that no pair collides is exp(Σ ln(1 − p)) over all of it.
-    let mut frontier_log_miss = 0.0f64;
-    // `Decision::Evidence` needs the evidence sum; the other rules only count pairs.
-    let count_evidence = query.decision == Decision::Evidence;
-    // Σ p·point, Σ p·normal, Σ p over the leaf pairs left in the frontier: the contact region.
-    let mut region = (Vec3::ZERO, Vec3::ZERO, 0.0f64);
-    // The most probable pair, probabilities compared in steps of 1/20 and ties going to the
-    // deeper pair (whose boxes localise the contact better).
-    let mut best: Option<((u32, u32), u32, u32)> = None;
-    // Records a pair's estimate `p` in the highest probability seen and the most probable pair.
-    let note_estimate =
-        |p: f64, ia: u32, ib: u32, max_p: &mut f64, best: &mut Option<((u32, u32), u32, u32)>| {
-            *max_p = max_p.max(p);
-            let depth =
-                u32::from(a.nodes()[ia as usize].depth) + u32::from(b.nodes()[ib as usize].depth);
-            let key = ((p * 20.0) as u32, depth);
-            if p > 0.0 && best.is_none_or(|(k, _, _)| key > k) {
-                *best = Some((key, ia, ib));
-            }
-        };
-    let mut pops = 0u32;
-    // Work since the last clock read, in pops (a leaf pair's triangle tests count too).
-    let mut unclocked = 0u32;
-    // The evidence bar matters to `Order::EvidenceFirst` only.
-    let evidence_bar = if query.order == Order::EvidenceFirst {
-        pair_threshold()
-    } else {
-        0.0
-    };
-    ws.queue.reset(query.order, evidence_bar);
-    ws.queue.push(Entry {
-        p: 1.0,
-        rank: 1.0,
-        a: 0,
-        b: 0,
-        center_distance: 0.0,
-    });
-    // Leaf pairs are tested exactly in exact-leaves mode, and so is a root pair of two leaves.
-    ws.exact.cache_begin(mb.mesh().vertex_count());
-    // Estimates the queued pairs that have no estimate yet (on-demand mode); returns how many
-    // queued pairs count as evidence, and their evidence `Σ −ln(1 − p)`.
-    let estimate_queued = |queued: &mut [Entry], max_p: &mut f64, best: &mut Option<_>| {
+    }
+
+    /// Estimates the queued pairs that have no estimate yet (on-demand mode); returns how many
+    /// queued pairs count as evidence, and their evidence `Σ −ln(1 − p)`.
+    fn estimate_queued(&mut self, s: &Scene<'_>, queued: &mut [Entry]) -> (u32, f64) {
         let (mut found, mut sum) = (0u32, 0.0f64);
         for e in queued {
             if e.p == UNESTIMATED {
                 // The descent leaves the centre distance to be worked out here (the same
                 // arithmetic as its box test).
                 let d = if e.center_distance.is_nan() {
-                    overlap_distance(a, b, &frame, e.a, e.b).unwrap_or(0.0)
+                    overlap_distance(s.a, s.b, &s.frame, e.a, e.b).unwrap_or(0.0)
                 } else {
                     e.center_distance
                 };
-                e.p = estimate(&node_pair(e.a, e.b, d));
-                note_estimate(e.p, e.a, e.b, max_p, best);
+                e.p = s.estimate(e.a, e.b, d);
+                self.note_estimate(s, e.p, e.a, e.b);
             }
-            if e.p >= pair_threshold() && (e.a, e.b) != (0, 0) {
+            if e.p >= s.pair_threshold() && (e.a, e.b) != (0, 0) {
                 found += 1;
                 sum -= (1.0 - e.p).ln();
             }
         }
         (found, sum)
-    };
-    if on_demand {
+    }
+
+    /// An exact hit: the leaf pair `nodes` holds the intersecting triangles.
+    fn hit(&mut self, s: &Scene<'_>, nodes: (u32, u32), triangles: TrianglePair) {
+        self.out.collides = true;
+        self.out.probability = 1.0;
+        self.out.max_pair_probability = 1.0;
+        self.out.pairs_found += 1;
+        self.out.witness = Some(s.witness(nodes.0, nodes.1, Some(triangles)));
+    }
+
+    /// Tries the interpenetration certificate during the traversal.
+    fn certificate(&mut self, s: &Scene<'_>) -> Certificate {
+        let c = certificate(
+            (s.a, s.pose_a),
+            (s.b, s.pose_b),
+            &s.rel,
+            s.query,
+            &mut self.out,
+        );
+        if let Certificate::Failed { .. } = c {
+            self.interior_failed = true;
+        }
+        c
+    }
+}
+
+impl Traversal<'_> {
+    /// Runs the traversal from the root pair; `apart` when the certificate already found the
+    /// pose probably apart.
+    fn run(mut self, ws: &mut AdbWorkspace, apart: bool) -> AdbOutcome {
+        let s = &self.scene;
+        // The evidence bar matters to `Order::EvidenceFirst` only.
+        let evidence_bar = if s.query.order == Order::EvidenceFirst {
+            s.pair_threshold()
+        } else {
+            0.0
+        };
+        ws.queue.reset(s.query.order, evidence_bar);
+        ws.queue.push(Entry {
+            p: 1.0,
+            rank: 1.0,
+            a: 0,
+            b: 0,
+            center_distance: 0.0,
+        });
+        // Leaf pairs are tested exactly in exact-leaves mode, and so is a root pair of two leaves.
+        ws.exact
+            .cache_begin(s.b.collision_mesh().mesh().vertex_count());
+        let settled = if s.on_demand {
+            self.descend(ws, apart)
+        } else {
+            self.expand(ws)
+        };
+        if settled {
+            return self.found.out;
+        }
+        self.finish(ws)
+    }
+
+    /// The on-demand straddle order ([`Descent`]) until it ends; whether a certificate
+    /// settled the answer.
+    fn descend(&mut self, ws: &mut AdbWorkspace, apart: bool) -> bool {
+        let (s, found) = (&self.scene, &mut self.found);
         // Where the certificate found the pose probably apart, the order buys nothing: with no
         // budget to cut the traversal short, every overlapping pair is expanded whatever the
         // order. (Under a budget, the order decides what the frontier looks like when the
         // budget ends: kept.)
-        let straddle_order = |apart: bool| !(apart && query.budget == Budget::Unlimited);
+        let straddle_order = |apart: bool| !(apart && s.query.budget == Budget::Unlimited);
         let f = DescentFrame {
-            a,
-            b,
-            frame: &frame,
-            rel64: &rel64,
-            budget: query.budget,
-            start,
+            a: s.a,
+            b: s.b,
+            frame: &s.frame,
+            rel64: &s.rel64,
+            budget: s.query.budget,
+            start: s.start,
         };
         let mut descent = Descent {
             pops: 0,
             unclocked: 0,
             next_check: FIRST_EVIDENCE_CHECK,
-            visited: out.node_pairs_visited,
+            visited: found.out.node_pairs_visited,
             ordered: straddle_order(apart),
         };
         // The certificate's pop, if it comes during the traversal.
-        let mut pause = query.interior_after.filter(|&k| k > 0);
+        let mut pause = s.query.interior_after.filter(|&k| k > 0);
         loop {
             let end = descent.run(
                 &f,
@@ -547,86 +538,192 @@ pub fn adb_intersects(
                 &mut ws.exact,
                 pause,
                 &mut |queued| {
-                    let (found, sum) =
-                        estimate_queued(queued, &mut out.max_pair_probability, &mut best);
-                    found >= query.k_min || sum >= evidence_needed
+                    let (n, sum) = found.estimate_queued(s, queued);
+                    n >= s.query.k_min || sum >= s.evidence_needed
                 },
             );
-            out.node_pairs_visited = descent.visited;
+            found.out.node_pairs_visited = descent.visited;
             match end {
                 DescentEnd::Paused => {
                     pause = None;
-                    match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
-                        Certificate::Settled => return out,
-                        Certificate::Failed { apart } => {
-                            interior_failed = true;
-                            descent.ordered = straddle_order(apart);
-                        }
+                    match found.certificate(s) {
+                        Certificate::Settled => return true,
+                        Certificate::Failed { apart } => descent.ordered = straddle_order(apart),
                         Certificate::Unavailable => {}
                     }
                 }
-                DescentEnd::Done => break,
+                DescentEnd::Done => return false,
                 DescentEnd::Hit { nodes, triangles } => {
-                    out.collides = true;
-                    out.probability = 1.0;
-                    out.max_pair_probability = 1.0;
-                    out.pairs_found += 1;
-                    out.witness = Some(witness(nodes.0, nodes.1, Some(triangles)));
-                    break;
+                    found.hit(s, nodes, triangles);
+                    return false;
                 }
                 DescentEnd::Budget => {
-                    out.budget_exhausted = true;
-                    break;
+                    found.out.budget_exhausted = true;
+                    return false;
                 }
                 DescentEnd::Evidence => {
-                    out.collides = true;
-                    break;
+                    found.out.collides = true;
+                    return false;
                 }
             }
         }
     }
-    'queue: while !on_demand && let Some(e) = ws.queue.pop() {
-        let pair_threshold = pair_threshold();
-        pops += 1;
-        unclocked += 1;
-        if query.interior_after == Some(pops) {
-            match certificate((a, pose_a), (b, pose_b), &rel, query, &mut out) {
-                Certificate::Settled => return out,
-                Certificate::Failed { .. } => interior_failed = true,
-                Certificate::Unavailable => {}
+
+    /// The queue of the other orders until it ends; whether a certificate settled the answer.
+    fn expand(&mut self, ws: &mut AdbWorkspace) -> bool {
+        let (s, found) = (&self.scene, &mut self.found);
+        let query = s.query;
+        let (na, nb) = (
+            s.a.collision_mesh().bvh().nodes(),
+            s.b.collision_mesh().bvh().nodes(),
+        );
+        let mut pops = 0u32;
+        // Work since the last clock read, in pops (a leaf pair's triangle tests count too).
+        let mut unclocked = 0u32;
+        while let Some(e) = ws.queue.pop() {
+            let pair_threshold = s.pair_threshold();
+            pops += 1;
+            unclocked += 1;
+            if query.interior_after == Some(pops)
+                && let Certificate::Settled = found.certificate(s)
+            {
+                return true;
+            }
+            // The root pair is always expanded: a budget cannot end a query before it has
+            // looked.
+            let over = pops > 1
+                && budget_spent(
+                    query.budget,
+                    found.out.node_pairs_visited,
+                    &mut unclocked,
+                    s.start,
+                );
+            if over {
+                found.out.budget_exhausted = true;
+                ws.queue.push(e);
+                return false;
+            }
+            if (e.a, e.b) != (0, 0) && s.disjoint_evidence && e.p >= pair_threshold {
+                // Replaced by its children: only disjoint pairs count as evidence.
+                found.out.pairs_found -= 1;
+                if s.count_evidence {
+                    found.evidence += (1.0 - e.p).ln();
+                }
+            }
+            let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
+            if x.is_leaf() && y.is_leaf() {
+                // Queued in exact-leaves mode (or the root pair of two single-leaf trees):
+                // decide exactly.
+                let (hit, tests) = leaf_pair_hit((s.a, x), (s.b, y), &s.rel64, &mut ws.exact);
+                if let Some(triangles) = hit {
+                    found.hit(s, (e.a, e.b), triangles);
+                    return false;
+                }
+                unclocked += tests / TRIANGLE_TESTS_PER_POP;
+                continue;
+            }
+            let (mut queued, n_queued, done) = found.expand_pair(s, (x, e.a), (y, e.b));
+            ws.queue.push_children(&mut queued[..n_queued]);
+            if done {
+                return false;
             }
         }
-        // The root pair is always expanded: a budget cannot end a query before it has looked.
-        let over =
-            pops > 1 && budget_spent(query.budget, out.node_pairs_visited, &mut unclocked, start);
-        if over {
-            out.budget_exhausted = true;
-            ws.queue.push(e);
-            break;
-        }
-        if (e.a, e.b) != (0, 0) && disjoint_evidence && e.p >= pair_threshold {
-            // Replaced by its children: only disjoint pairs count as evidence.
-            out.pairs_found -= 1;
-            if count_evidence {
-                evidence += (1.0 - e.p).ln();
+        false
+    }
+
+    /// The answer from what was found: the frontier's confidence and the decision rule, and
+    /// the witness.
+    fn finish(self, ws: &mut AdbWorkspace) -> AdbOutcome {
+        let Traversal {
+            scene: s,
+            found: mut f,
+        } = self;
+        let query = s.query;
+        if f.out.probability < 1.0 {
+            // The queued part of the frontier, summed only now: most pairs are expanded, and a
+            // traversal that runs to the end leaves none (an empty frontier sums to 0: no
+            // collision).
+            if s.on_demand {
+                // The queued pairs not estimated yet are estimated now, and the evidence rule
+                // applies to them as at the checks.
+                let (n, sum) = f.estimate_queued(&s, ws.queue.stack_mut());
+                f.out.pairs_found = n;
+                f.out.collides |= n >= query.k_min || sum >= s.evidence_needed;
+            }
+            let queued: f64 = ws.queue.iter().map(|e| (1.0 - e.p).ln()).sum();
+            // Disjoint pairs of one contact region are correlated: `r` of them count as one
+            // independent piece, as in the evidence rules.
+            let log_miss = (f.frontier_log_miss + queued) / EVIDENCE_REDUNDANCY;
+            f.out.probability = (1.0 - log_miss.exp()).clamp(0.0, 1.0);
+            // A failed certificate is evidence against the deep overlaps: the confidence as
+            // calibrated for such answers on the mesh itself, for a tree against itself, the
+            // pairs it was fitted on. Between different trees it does not carry over (a thin
+            // wall's map has next to no inside for a ball's samples to land in, so there the
+            // certificate's failure says little), and the frontier's confidence stands.
+            if f.interior_failed
+                && std::ptr::eq(s.a, s.b)
+                && f.out.probability > 0.0
+                && f.out.probability < 1.0
+                && let Some(c) = s.a.confidence_calibration()
+            {
+                f.out.probability = c.map(f.out.probability).clamp(0.0, MAX_ESTIMATE);
+            }
+            if !f.out.collides {
+                f.out.collides = match query.decision {
+                    Decision::Confidence | Decision::Evidence => {
+                        f.out.probability > 0.0 && f.out.probability >= query.collide_at
+                    }
+                    Decision::Paper => f.out.budget_exhausted && f.out.pairs_found >= 1,
+                };
             }
         }
-        let (x, y) = (&na[e.a as usize], &nb[e.b as usize]);
-        if x.is_leaf() && y.is_leaf() {
-            // Queued in exact-leaves mode (or the root pair of two single-leaf trees): decide exactly.
-            let (hit, tests) = leaf_pair_hit((a, x), (b, y), &rel64, &mut ws.exact);
-            if let Some(triangles) = hit {
-                out.collides = true;
-                out.probability = 1.0;
-                out.max_pair_probability = 1.0;
-                out.pairs_found += 1;
-                out.witness = Some(witness(e.a, e.b, Some(triangles)));
-                break 'queue;
-            }
-            unclocked += tests / TRIANGLE_TESTS_PER_POP;
-            continue;
+        if f.out.witness.is_none() {
+            let mut region = f.region;
+            f.out.witness = f.best.map(|(_, ia, ib)| {
+                let mut w = s.witness(ia, ib, None);
+                // The contact region is the probability-weighted centre and mean normal of the
+                // frontier's leaf pairs, or of its queued pairs that count as evidence when the
+                // traversal stopped before reaching leaves (the best pair's boxes may be large).
+                if region.2 == 0.0 {
+                    for e in ws
+                        .queue
+                        .iter()
+                        .filter(|e| e.p >= s.pair_threshold() && (e.a, e.b) != (0, 0))
+                    {
+                        let w = s.witness(e.a, e.b, None);
+                        region.0 += w.point * e.p as f32;
+                        region.1 += w.normal * e.p as f32;
+                        region.2 += e.p;
+                    }
+                }
+                if region.2 > 0.0 {
+                    w.point = region.0 / region.2 as f32;
+                    w.normal = region.1.try_normalize().unwrap_or(w.normal);
+                }
+                w
+            });
         }
-        // The children to queue, once all four are estimated.
+        f.out
+    }
+}
+
+impl Found {
+    /// Estimates the overlapping child pairs of `(x, y)` (a leaf stands for itself) and sorts
+    /// each into the queue or the frontier; returns the pairs to queue and whether `k_min`
+    /// pairs (or enough evidence) are now found (then the children estimated so far are
+    /// queued, so that the frontier is complete, and the traversal ends).
+    fn expand_pair(
+        &mut self,
+        s: &Scene<'_>,
+        (x, ia0): (&BvhNode, u32),
+        (y, ib0): (&BvhNode, u32),
+    ) -> ([Entry; 4], usize, bool) {
+        let query = s.query;
+        let pair_threshold = s.pair_threshold();
+        let (na, nb) = (
+            s.a.collision_mesh().bvh().nodes(),
+            s.b.collision_mesh().bvh().nodes(),
+        );
         let mut queued = [Entry {
             p: 0.0,
             rank: 0.0,
@@ -642,40 +739,36 @@ pub fn adb_intersects(
                 [n.left(), n.left() + 1]
             }
         };
-        // Set when k_min pairs (or enough evidence) are found: the children estimated so far
-        // are queued, so that the frontier is complete, then the traversal ends.
-        let mut found = false;
         // Each child prepared once for its (up to) two box tests.
-        let (kids_a, kids_b) = (children(x, e.a), children(y, e.b));
-        let prepare = |ib: u32| (ib != u32::MAX).then(|| prepare_second(b, &frame, ib));
+        let (kids_a, kids_b) = (children(x, ia0), children(y, ib0));
+        let prepare = |ib: u32| (ib != u32::MAX).then(|| prepare_second(s.b, &s.frame, ib));
         let prepared_b = [prepare(kids_b[0]), prepare(kids_b[1])];
-        'children: for ia in kids_a {
+        for ia in kids_a {
             if ia == u32::MAX {
                 continue;
             }
-            let first = prepare_first(a, &frame, ia);
+            let first = prepare_first(s.a, &s.frame, ia);
             for (&ib, second) in kids_b.iter().zip(&prepared_b) {
                 let Some(second) = second else {
                     continue;
                 };
-                out.node_pairs_visited += 1;
+                self.out.node_pairs_visited += 1;
                 let (cx, cy) = (&na[ia as usize], &nb[ib as usize]);
-                let Some(overlap) = frame.overlap_prepared(&first, second) else {
+                let Some(overlap) = s.frame.overlap_prepared(&first, second) else {
                     continue;
                 };
-                let p = estimate(&node_pair(ia, ib, overlap.center_distance));
-                note_estimate(p, ia, ib, &mut out.max_pair_probability, &mut best);
+                let p = s.estimate(ia, ib, overlap.center_distance);
+                self.note_estimate(s, p, ia, ib);
                 if p >= pair_threshold {
-                    out.pairs_found += 1;
-                    if count_evidence {
-                        evidence -= (1.0 - p).ln();
+                    self.out.pairs_found += 1;
+                    if s.count_evidence {
+                        self.evidence -= (1.0 - p).ln();
                     }
-                    if out.pairs_found >= query.k_min || evidence >= evidence_needed {
-                        out.collides = true;
-                        found = true;
+                    if self.out.pairs_found >= query.k_min || self.evidence >= s.evidence_needed {
+                        self.out.collides = true;
                         // It stays in the frontier (not queued: it does not shape the region).
-                        frontier_log_miss += (1.0 - p).ln();
-                        break 'children;
+                        self.frontier_log_miss += (1.0 - p).ln();
+                        return (queued, n_queued, true);
                     }
                 }
                 let both_leaves = cx.is_leaf() && cy.is_leaf();
@@ -700,91 +793,19 @@ pub fn adb_intersects(
                     n_queued += 1;
                 } else {
                     // Left in the frontier for good (a leaf pair, or pruned).
-                    frontier_log_miss += (1.0 - p).ln();
+                    self.frontier_log_miss += (1.0 - p).ln();
                     if both_leaves && p > 0.0 {
                         // A leaf pair left in the frontier shapes the contact region.
-                        let w = witness(ia, ib, None);
-                        region.0 += w.point * p as f32;
-                        region.1 += w.normal * p as f32;
-                        region.2 += p;
+                        let w = s.witness(ia, ib, None);
+                        self.region.0 += w.point * p as f32;
+                        self.region.1 += w.normal * p as f32;
+                        self.region.2 += p;
                     }
                 }
             }
         }
-        ws.queue.push_children(&mut queued[..n_queued]);
-        if found {
-            break;
-        }
+        (queued, n_queued, false)
     }
-    if out.probability < 1.0 {
-        // The queued part of the frontier, summed only now: most pairs are expanded, and a
-        // traversal that runs to the end leaves none (an empty frontier sums to 0: no
-        // collision).
-        if on_demand {
-            // The queued pairs not estimated yet are estimated now, and the evidence rule
-            // applies to them as at the checks.
-            let (found, sum) = estimate_queued(
-                ws.queue.stack_mut(),
-                &mut out.max_pair_probability,
-                &mut best,
-            );
-            out.pairs_found = found;
-            out.collides |= found >= query.k_min || sum >= evidence_needed;
-        }
-        let queued: f64 = ws.queue.iter().map(|e| (1.0 - e.p).ln()).sum();
-        // Disjoint pairs of one contact region are correlated: `r` of them count as one
-        // independent piece, as in the evidence rules.
-        let log_miss = (frontier_log_miss + queued) / EVIDENCE_REDUNDANCY;
-        out.probability = (1.0 - log_miss.exp()).clamp(0.0, 1.0);
-        // A failed certificate is evidence against the deep overlaps: the confidence as
-        // calibrated for such answers on the mesh itself, for a tree against itself, the pairs
-        // it was fitted on. Between different trees it does not carry over (a thin wall's map
-        // has next to no inside for a ball's samples to land in, so there the certificate's
-        // failure says little: the cannonball example missed a third of its hits with it),
-        // and the frontier's confidence stands.
-        if interior_failed
-            && std::ptr::eq(a, b)
-            && out.probability > 0.0
-            && out.probability < 1.0
-            && let Some(c) = a.confidence_calibration()
-        {
-            out.probability = c.map(out.probability).clamp(0.0, MAX_ESTIMATE);
-        }
-        if !out.collides {
-            out.collides = match query.decision {
-                Decision::Confidence | Decision::Evidence => {
-                    out.probability > 0.0 && out.probability >= query.collide_at
-                }
-                Decision::Paper => out.budget_exhausted && out.pairs_found >= 1,
-            };
-        }
-    }
-    if out.witness.is_none() {
-        out.witness = best.map(|(_, ia, ib)| {
-            let mut w = witness(ia, ib, None);
-            // The contact region is the probability-weighted centre and mean normal of the
-            // frontier's leaf pairs, or of its queued pairs that count as evidence when the
-            // traversal stopped before reaching leaves (the best pair's boxes may be large).
-            if region.2 == 0.0 {
-                for e in ws
-                    .queue
-                    .iter()
-                    .filter(|e| e.p >= pair_threshold() && (e.a, e.b) != (0, 0))
-                {
-                    let w = witness(e.a, e.b, None);
-                    region.0 += w.point * e.p as f32;
-                    region.1 += w.normal * e.p as f32;
-                    region.2 += e.p;
-                }
-            }
-            if region.2 > 0.0 {
-                w.point = region.0 / region.2 as f32;
-                w.normal = region.1.try_normalize().unwrap_or(w.normal);
-            }
-            w
-        });
-    }
-    out
 }
 
 /// What [`certificate`] did.

@@ -4,76 +4,13 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::Vec3;
 
-use std::sync::Arc;
-
+use super::calibration::{Calibration, ConfidenceCalibration};
 use super::cells::{CellGrid, CellScratch, count_well_filled};
-use super::certificate_confidence::TRAINING_SEED;
-use super::confidence_fit::ConfidenceCalibration;
-use super::estimator::PlanarityEstimator;
-use super::fit::{Calibration, FitOptions, FittedEstimator};
 use super::interior::InteriorMap;
+use super::options::AdbBuildOptions;
 use crate::bvh::CollisionMesh;
 use crate::bvh::box_test::{FirstBox, RelativeFrame, SecondBox};
 use crate::geometry::Aabb;
-
-/// Options of [`AdbTree::build_with`].
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AdbBuildOptions {
-    /// Cells per axis of each node's grid (`resolution³` cells, clamped to 1..=8).
-    ///
-    /// 4 (64 cells, within the papers' one-byte count) is the default, by measurement (the
-    /// `accuracy_vs_time` report's `--resolution R`, README): the default query, which
-    /// estimates few pairs, is as fast at 2, 4 or 6, but at 2 the coarse counts separate node
-    /// pairs so poorly that a query decided by the estimates (estimated leaves) explores nearly
-    /// everything; 6 is slower than 4 there and builds slower.
-    pub resolution: u32,
-    /// Fraction of the papers' MaxArea at which a cell counts as well-filled (see
-    /// [`CellGrid::with_fill_fraction`]).
-    pub fill_fraction: f32,
-    /// Worker threads for the build (0: one per available core).
-    pub threads: usize,
-    /// Fit a [`Calibration`] of the [`PlanarityEstimator`] on the mesh itself (the papers'
-    /// "estimate parameters" step; used by the default
-    /// [`CalibratedEstimator`](super::CalibratedEstimator)). `None` skips it.
-    pub fit: Option<FitOptions>,
-    /// Voxels along the longest side of the mesh's box in its [`InteriorMap`] (the map of its
-    /// inside and outside that the interpenetration certificate looks surface samples up in:
-    /// [`AdbQuery::interior_after`](super::AdbQuery::interior_after)); 0 builds no map. 128 by
-    /// default (a quarter of a byte per voxel: 0.18–0.44 MB on the shared meshes of 50k
-    /// triangles and more); on the `accuracy_vs_time` poses 64 and 96 were within the noise of
-    /// it (`--interior-resolution`), a finer map keeps thin parts inside.
-    pub interior_resolution: u32,
-    /// Coarse surface samples of the mesh that the certificate always looks up in the other
-    /// mesh's map (at most [`MAX_SURFACE_SAMPLES`](super::MAX_SURFACE_SAMPLES); each chunk of
-    /// them also has finer samples, looked up only where it came near the other mesh; the map
-    /// also holds the leading samples of 384 directions, about 140 kB, whatever this is). 128
-    /// by default: on the `accuracy_vs_time` poses (`--interior-samples`) 64 and 256 were
-    /// slower before the leading samples; with them, 32, 64 and 96 are within the run-to-run
-    /// noise of 128 on ogre and stanford-bunny, and 256 is slower.
-    pub interior_samples: usize,
-    /// Poses of the mesh against itself on which the build measures how often the
-    /// certificate of an open mesh's map (not [exact](super::InteriorMap::is_exact)) is right
-    /// ([`InteriorMap::measure_certificate`]), for its
-    /// [`certificate_confidence`](super::InteriorMap::certificate_confidence): a certified pose
-    /// costs one exact query. 0 skips the measurement, and then an open mesh's certificate
-    /// never settles a query. 2000 by default: with every certificate right, the bound reaches
-    /// 0.99 once 299 of the poses are certified. Closed meshes are never measured.
-    pub certificate_poses: usize,
-}
-
-impl Default for AdbBuildOptions {
-    fn default() -> Self {
-        Self {
-            resolution: 4,
-            fill_fraction: 0.5,
-            threads: 0,
-            fit: Some(FitOptions::default()),
-            interior_resolution: 128,
-            interior_samples: 128,
-            certificate_poses: 2000,
-        }
-    }
-}
 
 /// Progress of a build, reported to the callback of [`AdbTree::build_with_progress`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -133,26 +70,19 @@ pub struct AdbTree {
     nodes: Vec<AdbNode>,
     max_depth: u32,
     resolution: u32,
-    calibration: Option<Calibration>,
-    interior: Option<InteriorMap>,
-    confidence_calibration: Option<ConfidenceCalibration>,
+    /// Set by the build's fit ([`AdbBuildOptions::fit`]).
+    pub(super) calibration: Option<Calibration>,
+    /// Set by the build ([`AdbBuildOptions::interior_resolution`]).
+    pub(super) interior: Option<InteriorMap>,
+    /// Set by the build's confidence fit ([`AdbBuildOptions::confidence_fit`]).
+    pub(super) confidence_calibration: Option<ConfidenceCalibration>,
     options: AdbBuildOptions,
 }
 
 impl AdbTree {
-    /// Builds the tree with default options.
-    pub fn new(mesh: CollisionMesh) -> Self {
-        Self::build_with(mesh, AdbBuildOptions::default())
-    }
-
-    /// Builds the tree with the given options.
-    pub fn build_with(mesh: CollisionMesh, options: AdbBuildOptions) -> Self {
-        Self::build_with_progress(mesh, options, &|_| {})
-    }
-
-    /// Builds the tree, calling `progress` (from the build threads, in increasing
-    /// `nodes_done` order per thread) as nodes are counted.
-    pub fn build_with_progress(
+    /// The tree's per-node data (cell counts, depths, shapes, slabs), without an interior map
+    /// or fits: what [`AdbTree::build_with_progress`] starts from.
+    pub(super) fn with_nodes(
         mesh: CollisionMesh,
         options: AdbBuildOptions,
         progress: &(dyn Fn(AdbBuildProgress) + Sync),
@@ -195,59 +125,22 @@ impl AdbTree {
             })
             .collect();
         node_slabs(&mesh, &mut nodes);
-        let interior = (options.interior_resolution > 0).then(|| {
-            let mut map =
-                InteriorMap::build(&mesh, options.interior_resolution, options.interior_samples);
-            if options.certificate_poses > 0 {
-                map.measure_certificate(&mesh, options.certificate_poses, TRAINING_SEED);
-            }
-            map
-        });
-        let mut tree = Self {
+        Self {
             mesh,
             nodes,
             max_depth,
             resolution,
             calibration: None,
-            interior,
+            interior: None,
             confidence_calibration: None,
             options,
-        };
-        if let Some(fit) = options.fit {
-            let base = Arc::new(PlanarityEstimator::default());
-            tree.calibration =
-                Some(FittedEstimator::fit(&tree, &tree, base, fit).into_calibration());
-            if tree.interior.is_some() {
-                tree.confidence_calibration = ConfidenceCalibration::fit(&tree, fit);
-            }
         }
-        tree
     }
 
     /// The options it was built with.
     #[inline]
     pub fn options(&self) -> &AdbBuildOptions {
         &self.options
-    }
-
-    /// The tree of this mesh scaled by `scale` along its local axes (a negative factor
-    /// mirrors it; triangles keep facing outwards), built with the same options.
-    ///
-    /// # Errors
-    /// As [`TriMesh::scaled`](crate::mesh::TriMesh::scaled).
-    ///
-    /// # Example
-    /// ```
-    /// use stochastic_collision::adb::AdbTree;
-    /// use stochastic_collision::prelude::*;
-    /// let ball = AdbTree::new(CollisionMesh::new(generate::icosphere(1.0, 1)));
-    /// let big = ball.scaled(Vec3::splat(2.0))?;
-    /// assert_eq!(big.collision_mesh().bvh().root_aabb().max.x, 2.0 * ball.collision_mesh().bvh().root_aabb().max.x);
-    /// # Ok::<(), MeshError>(())
-    /// ```
-    pub fn scaled(&self, scale: Vec3) -> Result<AdbTree, crate::mesh::MeshError> {
-        let mesh = self.mesh.mesh().scaled(scale)?;
-        Ok(Self::build_with(CollisionMesh::new(mesh), self.options))
     }
 
     /// The calibration fitted on this mesh at build time, if any.

@@ -3,7 +3,7 @@
 use glam::{Mat3A, Vec3, Vec3A};
 
 use super::clearance::Clearance;
-use super::interior::CERTIFY_CHUNK;
+use super::surface_samples::CERTIFY_CHUNK;
 
 /// One chunk of sample coordinates.
 pub(super) type Chunk = [f32; CERTIFY_CHUNK];

@@ -1,0 +1,274 @@
+//! The ADB traversal's answers, pinned: every field of every outcome of [`adb_intersects`]
+//! (floats by their bits) on seeded near-contact poses of generated mesh pairs, under every
+//! [`Order`], several deterministic node-pair budgets and query variants (decision rules,
+//! estimated leaves, the certificate before, during or never, pruning), hashed per mesh pair
+//! and variant and compared with the fingerprints the traversal gave when they were recorded.
+//!
+//! A change to the traversal that is meant to keep its answers (a refactoring) must keep every
+//! fingerprint. A change meant to alter answers must say so and record the new fingerprints:
+//! on a mismatch the test prints the whole table in the form of [`EXPECTED`].
+use std::sync::Arc;
+
+use glam::Vec3;
+use stochastic_collision::adb::{
+    AdbBuildOptions, AdbOutcome, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, Order,
+    PaperEstimator, adb_intersects,
+};
+use stochastic_collision::bvh::CollisionMesh;
+use stochastic_collision::geometry::Pose;
+use stochastic_collision::mesh::generate;
+use stochastic_collision::poses::near_contact_poses;
+
+/// Every traversal order.
+const ORDERS: [Order; 4] = [
+    Order::Straddle,
+    Order::DepthFirst,
+    Order::EvidenceFirst,
+    Order::BestFirst,
+];
+
+/// Deterministic budgets: none, the root pair only, and node-pair budgets that cut the
+/// traversal at various depths.
+const BUDGETS: [Budget; 5] = [
+    Budget::Unlimited,
+    Budget::NodePairs(1),
+    Budget::NodePairs(12),
+    Budget::NodePairs(60),
+    Budget::NodePairs(300),
+];
+
+/// Poses per mesh pair (near first contact, within ±15 % of the size).
+const POSES: usize = 100;
+
+/// The query variants, by name.
+fn variants() -> Vec<(&'static str, AdbQuery)> {
+    let d = AdbQuery::default();
+    vec![
+        ("default", d.clone()),
+        (
+            "evidence_estimated_leaves",
+            AdbQuery {
+                decision: Decision::Evidence,
+                exact_leaves: false,
+                ..d.clone()
+            },
+        ),
+        (
+            "estimated_leaves",
+            AdbQuery {
+                exact_leaves: false,
+                ..d.clone()
+            },
+        ),
+        (
+            "certificate_at_pop_5",
+            AdbQuery {
+                interior_after: Some(5),
+                ..d.clone()
+            },
+        ),
+        (
+            "no_certificate_k3",
+            AdbQuery {
+                interior_after: None,
+                k_min: 3,
+                ..d.clone()
+            },
+        ),
+        (
+            "pruned",
+            AdbQuery {
+                p_prune: 0.02,
+                collide_at: 0.3,
+                ..d.clone()
+            },
+        ),
+        (
+            "paper",
+            AdbQuery {
+                estimator: Arc::new(PaperEstimator::default()),
+                ..AdbQuery::paper()
+            },
+        ),
+    ]
+}
+
+/// The mesh pairs: a mesh against itself (the same tree: the failed-certificate calibration
+/// applies), closed meshes of different shapes and sizes, and an open mesh.
+fn pairs() -> Vec<(&'static str, Arc<AdbTree>, Arc<AdbTree>)> {
+    let build = |mesh| {
+        Arc::new(AdbTree::build_with(
+            CollisionMesh::new(mesh),
+            AdbBuildOptions::default(),
+        ))
+    };
+    let ball = build(generate::icosphere(1.0, 3));
+    let torus = build(generate::torus(1.0, 0.3, 32, 12));
+    let brick = build(generate::cuboid(Vec3::new(1.0, 0.4, 0.7), 2));
+    let pebble = build(generate::icosphere(0.12, 2));
+    let cloth = build(generate::cloth_grid(2.0, 2.0, 12, 12));
+    vec![
+        ("ball_ball", ball.clone(), ball.clone()),
+        ("torus_brick", torus.clone(), brick.clone()),
+        ("brick_pebble", brick, pebble),
+        ("cloth_ball", cloth, ball),
+        ("torus_torus", torus.clone(), torus),
+    ]
+}
+
+/// FNV-1a over 64-bit words.
+struct Fingerprint(u64);
+
+impl Fingerprint {
+    fn new() -> Self {
+        Self(0xcbf2_9ce4_8422_2325)
+    }
+
+    fn word(&mut self, w: u64) {
+        for byte in w.to_le_bytes() {
+            self.0 ^= u64::from(byte);
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+    }
+
+    fn vec3(&mut self, v: Vec3) {
+        for c in v.to_array() {
+            self.word(u64::from(c.to_bits()));
+        }
+    }
+
+    /// Every field of the outcome.
+    fn outcome(&mut self, o: &AdbOutcome) {
+        self.word(u64::from(o.collides));
+        self.word(o.probability.to_bits());
+        self.word(u64::from(o.pairs_found));
+        self.word(o.node_pairs_visited);
+        self.word(u64::from(o.budget_exhausted));
+        self.word(o.max_pair_probability.to_bits());
+        match &o.witness {
+            None => self.word(0),
+            Some(w) => {
+                self.word(1);
+                self.vec3(w.point);
+                self.vec3(w.normal);
+                self.word(u64::from(w.nodes.0) << 32 | u64::from(w.nodes.1));
+                match w.triangles {
+                    None => self.word(0),
+                    Some(t) => self.word(1 << 63 | u64::from(t.a) << 32 | u64::from(t.b)),
+                }
+            }
+        }
+        match &o.interpenetration {
+            None => self.word(0),
+            Some(c) => {
+                self.word(1);
+                self.vec3(c.inside_point);
+                self.word(u64::from(c.vertex));
+                self.word(u64::from(c.exact));
+                self.word(u64::from(c.depth.to_bits()));
+            }
+        }
+    }
+}
+
+/// The fingerprints recorded: (mesh pair, variant, fingerprint over every pose, order and
+/// budget).
+const EXPECTED: &[(&str, &str, u64)] = &[
+    ("ball_ball", "default", 0xac44b23ee50ea668),
+    ("ball_ball", "evidence_estimated_leaves", 0xb6b8850de429359f),
+    ("ball_ball", "estimated_leaves", 0x3daf161593e452ca),
+    ("ball_ball", "certificate_at_pop_5", 0xd8e647818e22add1),
+    ("ball_ball", "no_certificate_k3", 0x550066612db94fc9),
+    ("ball_ball", "pruned", 0x4e540fe09ff348e7),
+    ("ball_ball", "paper", 0x84315684d313015e),
+    ("torus_brick", "default", 0x4ce8bd568dccbba3),
+    (
+        "torus_brick",
+        "evidence_estimated_leaves",
+        0x762033d5a958aa5f,
+    ),
+    ("torus_brick", "estimated_leaves", 0x762033d5a958aa5f),
+    ("torus_brick", "certificate_at_pop_5", 0xed7c25c9c5cd0aa2),
+    ("torus_brick", "no_certificate_k3", 0xcc331defa9bd0fc0),
+    ("torus_brick", "pruned", 0x84f357521b924ebd),
+    ("torus_brick", "paper", 0xb94e0c957eaa38e3),
+    ("brick_pebble", "default", 0xb13126fa64222116),
+    (
+        "brick_pebble",
+        "evidence_estimated_leaves",
+        0xe9629ac7aae82c87,
+    ),
+    ("brick_pebble", "estimated_leaves", 0xe9629ac7aae82c87),
+    ("brick_pebble", "certificate_at_pop_5", 0xf8f0bf8d41f148b9),
+    ("brick_pebble", "no_certificate_k3", 0x0b4c8aba53feadb7),
+    ("brick_pebble", "pruned", 0x344c7033417870f5),
+    ("brick_pebble", "paper", 0xe1322463cdb5ef95),
+    ("cloth_ball", "default", 0x2ec84bc2c21e3527),
+    (
+        "cloth_ball",
+        "evidence_estimated_leaves",
+        0x94689a1dc795a2fd,
+    ),
+    ("cloth_ball", "estimated_leaves", 0x51f131ea356af742),
+    ("cloth_ball", "certificate_at_pop_5", 0x5101b5aadedac896),
+    ("cloth_ball", "no_certificate_k3", 0xe62ab467eb1d9a0b),
+    ("cloth_ball", "pruned", 0x0de6385021293166),
+    ("cloth_ball", "paper", 0x3261043733c65f52),
+    ("torus_torus", "default", 0x323f312ea7a17327),
+    (
+        "torus_torus",
+        "evidence_estimated_leaves",
+        0xb3372ad7b944232a,
+    ),
+    ("torus_torus", "estimated_leaves", 0xb3372ad7b944232a),
+    ("torus_torus", "certificate_at_pop_5", 0xc9d87c742253bf2f),
+    ("torus_torus", "no_certificate_k3", 0xaf42fe11140ddac5),
+    ("torus_torus", "pruned", 0x98c519bf3c7b4fed),
+    ("torus_torus", "paper", 0x83c57e6d179b68b8),
+];
+
+#[test]
+fn adb_outcomes_are_unchanged() {
+    let mut ws = AdbWorkspace::new();
+    let mut found = Vec::new();
+    for (pair, a, b) in pairs() {
+        let poses = near_contact_poses(a.collision_mesh(), b.collision_mesh(), POSES, 0.15, 0x5EED);
+        assert_eq!(poses.len(), POSES, "{pair}");
+        let mut collided = 0usize;
+        let mut total = 0usize;
+        for (variant, base) in variants() {
+            let mut f = Fingerprint::new();
+            for order in ORDERS {
+                for budget in BUDGETS {
+                    let query = AdbQuery {
+                        order,
+                        budget,
+                        ..base.clone()
+                    };
+                    for p in &poses {
+                        let out = adb_intersects(&a, &Pose::IDENTITY, &b, &p.pose, &query, &mut ws);
+                        collided += usize::from(out.collides);
+                        total += 1;
+                        f.outcome(&out);
+                    }
+                }
+            }
+            found.push((pair, variant, f.0));
+        }
+        // The poses are near contact: some answers say "collision", some do not (else the
+        // fingerprints would pin little).
+        assert!(
+            collided > 0 && collided < total,
+            "{pair}: {collided} of {total}"
+        );
+    }
+    let table: String = found
+        .iter()
+        .map(|(p, v, h)| format!("    (\"{p}\", \"{v}\", {h:#018x}),\n"))
+        .collect();
+    let expected: Vec<_> = EXPECTED.to_vec();
+    assert!(
+        found == expected,
+        "ADB outcomes changed; the fingerprints now are:\nconst EXPECTED: &[(&str, &str, u64)] = &[\n{table}];"
+    );
+}
