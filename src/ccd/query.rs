@@ -413,7 +413,7 @@ fn push_children(stack: &mut Vec<(u32, u32)>, i: u32, j: u32, first: bool) {
     }
 }
 
-/// Which features a root was found for.
+/// Which features a root was found for (vertex indices of the meshes).
 #[derive(Debug, Clone, Copy)]
 enum Meeting {
     VertexFace(u32),
@@ -436,60 +436,62 @@ impl Meeting {
 struct Candidate {
     triangles: TrianglePair,
     features: Meeting,
-    /// The face (its vertices) of a vertex–face contact.
-    face: [u32; 3],
 }
 
 /// The earliest contact of triangle `ta` of `a` and `tb` of `b` before `limit`: the six
-/// vertex–face and nine edge–edge tests.
+/// vertex–face and nine edge–edge tests, each bounded by the earliest found so far.
 fn triangle_pair(
     a: &impl SweptMesh,
     ta: u32,
     b: &impl SweptMesh,
     tb: u32,
     tol: &PrimitiveTolerances,
-    limit: f64,
+    mut limit: f64,
     scratch: &mut CcdScratch,
 ) -> Option<(f64, Candidate)> {
     let (fa, fb) = (a.triangles()[ta as usize], b.triangles()[tb as usize]);
     let (va, vb) = (fa.map(|v| a.vertex(v)), fb.map(|v| b.vertex(v)));
-    let triangles = TrianglePair { a: ta, b: tb };
-    let mut best: Option<(f64, Candidate)> = None;
-    let mut limit = limit;
-    let mut keep = |t: Option<f64>, c: Candidate, limit: &mut f64| {
-        if let Some(t) = t
-            && t < *limit
-        {
-            *limit = t;
-            best = Some((t, c));
-        }
-    };
-    for k in 0..3 {
-        let t = vertex_face_time(&va[k], &vb, tol, limit, scratch);
-        let c = Candidate {
-            triangles,
-            features: Meeting::VertexFace(fa[k]),
-            face: fb,
+    let edge = |k: usize| [k, (k + 1) % 3];
+    let meetings = (0..3)
+        .flat_map(|k| [Meeting::VertexFace(k as u32), Meeting::FaceVertex(k as u32)])
+        .chain((0..9).map(|k| {
+            let (i, j) = (edge(k / 3), edge(k % 3));
+            Meeting::EdgeEdge(i.map(|x| x as u32), j.map(|x| x as u32))
+        }));
+    let mut best = None;
+    // Meetings are built with corner numbers (0..3) and reported with vertex indices.
+    for m in meetings {
+        let (t, features) = match m {
+            Meeting::VertexFace(k) => (
+                vertex_face_time(&va[k as usize], &vb, tol, limit, scratch),
+                Meeting::VertexFace(fa[k as usize]),
+            ),
+            Meeting::FaceVertex(k) => (
+                vertex_face_time(&vb[k as usize], &va, tol, limit, scratch),
+                Meeting::FaceVertex(fb[k as usize]),
+            ),
+            Meeting::EdgeEdge(i, j) => (
+                edge_edge_time(
+                    &i.map(|k| va[k as usize]),
+                    &j.map(|k| vb[k as usize]),
+                    tol,
+                    limit,
+                    scratch,
+                ),
+                Meeting::EdgeEdge(i.map(|k| fa[k as usize]), j.map(|k| fb[k as usize])),
+            ),
         };
-        keep(t, c, &mut limit);
-        let t = vertex_face_time(&vb[k], &va, tol, limit, scratch);
-        let c = Candidate {
-            triangles,
-            features: Meeting::FaceVertex(fb[k]),
-            face: fa,
-        };
-        keep(t, c, &mut limit);
-    }
-    for i in 0..3 {
-        for j in 0..3 {
-            let (ea, eb) = ([i, (i + 1) % 3], [j, (j + 1) % 3]);
-            let t = edge_edge_time(&ea.map(|k| va[k]), &eb.map(|k| vb[k]), tol, limit, scratch);
-            let c = Candidate {
-                triangles,
-                features: Meeting::EdgeEdge(ea.map(|k| fa[k]), eb.map(|k| fb[k])),
-                face: [0; 3],
-            };
-            keep(t, c, &mut limit);
+        if let Some(t) = t {
+            // The solvers only return times before the limit.
+            limit = t;
+            let triangles = TrianglePair { a: ta, b: tb };
+            best = Some((
+                t,
+                Candidate {
+                    triangles,
+                    features,
+                },
+            ));
         }
     }
     best
@@ -501,14 +503,14 @@ impl Candidate {
         let (point, normal) = match self.features {
             Meeting::VertexFace(vertex) => {
                 let p = a.vertex(vertex);
-                let face = self.face.map(|v| b.vertex(v));
+                let face = b.triangles()[self.triangles.b as usize].map(|v| b.vertex(v));
                 // The face's normal, towards the side the vertex comes from.
                 let n = face_normal_towards(&face, &p, t);
                 (p.at(t), n)
             }
             Meeting::FaceVertex(vertex) => {
                 let p = b.vertex(vertex);
-                let face = self.face.map(|v| a.vertex(v));
+                let face = a.triangles()[self.triangles.a as usize].map(|v| a.vertex(v));
                 (p.at(t), -face_normal_towards(&face, &p, t))
             }
             Meeting::EdgeEdge(ea, eb) => {
