@@ -2,7 +2,7 @@
 //! `intersection_test` on the same meshes and poses, and BVH build against parry's TriMesh build.
 //!
 //! `cargo bench --bench exact_vs_parry` runs the criterion groups, then prints a table of
-//! per-query medians and the ratio ours / parry (the README's table comes from it).
+//! per-query medians and the ratio ours / parry (`docs/performance.md` quotes it).
 use std::hint::black_box;
 use std::time::{Duration, Instant};
 

@@ -11,8 +11,8 @@
 //!
 //! Timing: each method (the exact query, each configuration) answers all poses in turn before
 //! the next method starts, so no query runs on caches another method has just warmed on the
-//! same pose; this is done three times, and a query's time (and answer) is that of its median
-//! pass.
+//! same pose; this is done five times (`TIMING_PASSES`), and a query's time (and answer) is that
+//! of its median pass.
 //!
 //! ```text
 //! cargo run --release --example accuracy_vs_time -- [--full] [--poses N] [--out DIR] [--meshes a,b,...]
@@ -20,7 +20,7 @@
 //! ```
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
-//! `--full`: every shared mesh, 600 poses each (the README's figures: `--full --poses 300`). Writes
+//! `--full`: every shared mesh, 600 poses each (`docs/adb.md`'s figures: `--full --poses 300`). Writes
 //! `results.csv`, `summary.csv`, `outcomes.csv`, `time_vs_distance.csv`, `error_vs_time.svg`,
 //! `error_vs_median.svg`, `error_vs_distance.svg`, `time_vs_distance.svg` and `reliability.svg` to
 //! `DIR` (default `target/accuracy_vs_time`), and prints a table of the headline configurations, a
@@ -73,10 +73,9 @@ fn distance_bin(offset: f32) -> usize {
 fn distance_bin_center(i: usize) -> f64 {
     f64::from(-SPREAD + DISTANCE_BIN_WIDTH * (i as f32 + 0.5))
 }
-/// Passes over all poses per method; a query's time is its median over the passes. 5: with 3,
-/// the default query's median ratio to the exact one moved by up to ±0.03 from run to run on
-/// the shared 2-core machine (its median lies between the certified overlaps and the poses
-/// short of contact, where a few slow passes move it); with 5, by about ±0.015.
+/// Passes over all poses per method; a query's time is its median over the passes (an odd
+/// number, so the median is one pass's time; more passes make the ratios steadier from run to
+/// run on a shared machine).
 const TIMING_PASSES: usize = 5;
 
 struct Settings {
@@ -348,7 +347,7 @@ const HEADLINE_LABELS: [&str; 4] = [
     BUDGET_20_LABEL,
     ESTIMATED_LEAVES_LABEL,
 ];
-/// The ADB targets (README, "ADB-trees: what accuracy costs in time"): mean error and error
+/// The ADB targets (`docs/adb.md`): mean error and error
 /// near contact (%), the default's median against the exact query's on meshes of at least
 /// `TARGET_RATIO_TRIANGLES` triangles, and the error with a 20 µs budget (%).
 const TARGET_ERROR: f64 = 2.0;

@@ -1,5 +1,5 @@
 //! Regenerates the project's own assets (the only meshes `assets/` may hold): a torus, a
-//! coarser torus, and near-contact poses for the README's demo command.
+//! coarser torus, and near-contact poses for the README's `query` example command.
 //!
 //! ```text
 //! cargo run --release --example make_assets [-- DIR]   # default: assets/

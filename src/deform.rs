@@ -7,6 +7,8 @@
 //! seeded choice of axes, centre offset and largest angle; the angle grows from zero and
 //! returns to zero, so contact regions appear, move and vanish on every input, closed or open,
 //! flat (a cloth), tubular or convoluted.
+//!
+//! Next: [`crate::tracking`], which these deformations exercise (`examples/tracking_quality.rs`).
 
 use std::f32::consts::PI;
 

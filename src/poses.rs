@@ -4,8 +4,11 @@
 //! The scenario: two meshes at random orientations, the second approaching the first along a
 //! random direction; for each, the *first-contact distance* (largest centre offset along the
 //! direction at which the surfaces still touch) is found by exact bisection, and the pose is
-//! placed at a random offset around it. Most such poses are hard: the surfaces are within a
-//! few percent of the objects' size of each other.
+//! placed at a random offset around it, uniform in `[-spread, spread]` times the diagonal of
+//! the first mesh's box ([`near_contact_poses`]): with a small spread the surfaces are close
+//! at every pose, where collision queries work hardest.
+//!
+//! Next: [`crate::deform`], the deformations that benchmark tracking.
 use std::io::Write;
 use std::path::{Path, PathBuf};
 

@@ -1,6 +1,6 @@
 //! Every input the fuzz targets (`fuzz/`) found failing, replayed through the same checks
-//! (`tests/fuzz_checks`, which the targets call too). The README's "Fuzzing" section lists the
-//! runs and what each found.
+//! (`tests/fuzz_checks`, which the targets call too). `docs/robustness.md` ("Fuzzing") says what
+//! each found.
 mod fuzz_checks;
 
 use fuzz_checks::{MeshInput, MeshQueryInput, ProbabilityInput, TriTriInput};

@@ -1,4 +1,4 @@
-//! The README's "Using the plugin" example, kept compiling and running (fewer bodies and
+//! The README's "The plugin in an app" example, kept compiling and running (fewer bodies and
 //! frames).
 #![cfg(feature = "transform")]
 use bevy_app::prelude::*;

@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Reproduces the plugin measurements the README quotes: every run's printed summary goes to
+# Reproduces the plugin measurements docs/plugin.md quotes: every run's printed summary goes to
 # docs/plugin/runs/summary.txt and its JSON to docs/plugin/runs/<name>.json.
-# Usage: docs/plugin/measure.sh [path to a profile binary of another commit, run alongside]
-# (the README's comparison with the earlier pipeline used the binary of commit 18a6970).
+# Usage: docs/plugin/measure.sh [path to a profile binary of another commit, run alongside it
+# as "<name>-before"; the stored runs have none].
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 cargo build --release --example profile

@@ -140,9 +140,8 @@ impl Scene {
     }
 
     /// The scene's time budget per run when none is given, µs: 2 ms for the rigid scenes and
-    /// the cloth; 30 ms for the 100k-triangle intestine, whose refit and tracked-surface
-    /// update alone take about 3 ms (a surgical simulator's frame; at 2 ms its trackers would
-    /// run late every frame and find a tenth of the contacts).
+    /// the cloth; 30 ms for the 100k-triangle intestine (a surgical simulator's frame: its
+    /// refit and tracked-surface update alone would fill a 2 ms budget).
     pub fn default_budget_us(self) -> u64 {
         match self {
             Scene::Pile | Scene::Cannonball | Scene::Cloth => 2000,

@@ -45,6 +45,9 @@
 //! [`CellScratch`] and allocates nothing once the scratch has grown to the grid size, while
 //! [`accumulate_triangle`] zeroes about 4.6 KiB of stack buffers whenever a triangle needs
 //! splitting. Use the former for bulk work.
+//!
+//! Next: [`super::probability`] turns two nodes' counts into the probability that they hold
+//! intersecting triangles.
 
 use glam::{DVec3, Vec3};
 
@@ -58,9 +61,9 @@ pub const MAX_RESOLUTION: u32 = 16;
 pub const WELL_FILLED_REL_TOL: f64 = 1e-6;
 
 /// Vertex capacity of a clipped polygon. A triangle clipped to an axis-aligned box has at most
-/// 9 vertices in exact arithmetic. The extra room absorbs round-off. A vertex beyond the
-/// capacity would be dropped, but in a stress run of 2 million random and sliver triangles the
-/// largest polygon had 9 vertices.
+/// 9 vertices in exact arithmetic. The extra room absorbs the vertices round-off can add. A
+/// vertex beyond the capacity is dropped (the polygon's area is then underestimated), never
+/// written out of bounds.
 const POLY_CAP: usize = 16;
 
 /// The area of the largest planar polygon this module assumes fits in a cuboid with side

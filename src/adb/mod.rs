@@ -1,9 +1,10 @@
 //! ADB-trees (Klein & Zachmann 2003): time-critical, probability-guided mesh–mesh collision
-//! queries that trade accuracy for time, on purpose and measurably.
+//! queries that stop within a budget and say how sure their answer is.
 //!
 //! - [`AdbTree`]: a [`CollisionMesh`](crate::bvh::CollisionMesh)'s BVH whose nodes also store
 //!   the number of "well-filled" cells of a grid over the node ([`cells`]), the node's depth and
-//!   shape data.
+//!   shape data, and, by default, an [`InteriorMap`] of the mesh's inside and the fits that
+//!   calibrate its estimates ([`AdbBuildOptions`]).
 //! - [`probability`] and [`tables`]: the overlap-volume estimate, the runtime numbers
 //!   `s, s_A, s_B`, Eq. 8 (hypergeometric tail) and Eq. 9 (curvature term), computed stably,
 //!   with lookup tables built once per process.
@@ -14,6 +15,25 @@
 //!   estimates on demand: [`Order`]) with `p_min`, `k_min`, budgets (node pairs or time) and
 //!   optional exact leaves; its [`AdbOutcome`] says whether the meshes collide, with what
 //!   confidence, whether the budget ran out, and where the contact probably is.
+//! - [`InteriorMap`]: the interpenetration certificate that [`AdbQuery::interior_after`]
+//!   tries first: a surface sample of one mesh inside the other and one of the same
+//!   connected surface outside it prove that the surfaces cross.
+//!
+//! # Which answers are certain
+//! "Collision" is certain (probability 1) when an exact leaf test found an intersecting
+//! triangle pair, or when the certificate was found in an [exact](InteriorMap::is_exact) map:
+//! the map of a mesh whose every edge is used by an even number of triangles (a closed mesh);
+//! an open mesh's map is approximate. "No collision" is certain when, with exact leaves and no
+//! pruning, the traversal emptied its queue: every overlapping pair was ruled out by box or
+//! triangle tests. Every other answer (a budget ran out, `k_min` estimated pairs counted as
+//! evidence ([`Decision`]), the confidence reached [`AdbQuery::collide_at`], a certificate
+//! from an open mesh's map) is an estimate, and may be wrong. So the query as a whole gives
+//! the exact query's answer ([`crate::bvh::intersects`]) only with exact leaves,
+//! `p_min = 1`, `p_prune = 0` and no budget ([`AdbQuery::exact_leaves`]); the default query
+//! (`p_min = 0.99`) may decide from estimates.
+//!
+//! Next: [`crate::tracking`] follows the contacts of deforming and self-colliding meshes,
+//! where an ADB-tree (built once per rigid mesh) does not apply.
 
 mod build;
 mod calibration;

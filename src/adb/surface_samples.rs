@@ -22,9 +22,9 @@ pub(super) const REFINEMENT: usize = 64;
 const PARALLEL_SUPPORT_VERTICES: usize = 4096;
 
 /// Direction bins along each side of a cube face for the support samples: `6 · n²` bins of
-/// about `90° / n` each. With 8 (384 bins, about 11° each), on the `accuracy_vs_time` poses of
-/// ogre (whose horns and arms reach into the other copy where few of its evenly spread samples
-/// lie), the support samples settle most of the deep overlaps the evenly spread ones missed.
+/// about `90° / n` each; 8 gives 384 bins of about 11°. Protruding parts (horns, arms, spikes)
+/// that few evenly spread samples reach lead in some direction, so they get samples of their
+/// own.
 pub(super) const SUPPORT_BINS: u32 = 8;
 
 /// Points on a mesh's surface (with their connected components), in chunks of

@@ -3,8 +3,12 @@
 //! once").
 //!
 //! [`table()`] is the lazily built global [`ProbabilityTable`]; [`collision_probability_tabled`]
-//! is Eq. 9 read from it, the function the ADB traversal calls for every node pair. Counts
-//! beyond the table fall back to the direct evaluation in [`super::probability`].
+//! is Eq. 9 read from it, the function the ADB traversal calls for every node pair it
+//! estimates. Counts beyond the table fall back to the direct evaluation in
+//! [`super::probability`].
+//!
+//! Next: [`adb_intersects`](super::adb_intersects), the traversal that ranks and decides by
+//! these probabilities.
 
 use std::fmt;
 use std::sync::OnceLock;
@@ -33,8 +37,8 @@ const XM: usize = X_MAX as usize;
 /// accurate to about `10⁻¹⁴`. Entries that are exactly 0 or 1 (impossible and forced counts)
 /// stay exact. (`u16` fixed point would have cost `7.6·10⁻⁶`, too coarse for a `10⁻⁶` check.)
 ///
-/// Built from the ratio recurrence ([`probability::tail_probabilities`], one pass per triple);
-/// the build takes 3–5 ms, single-threaded, in both the release and the dev profile.
+/// Built from the ratio recurrence ([`probability::tail_probabilities`], one pass per triple),
+/// single-threaded, once per process ([`table()`]).
 pub struct ProbabilityTable {
     /// Row `index(s, s_a, s_b)` holds `Pr[c ≥ x]` at `x − 1`.
     rows: Box<[[f32; XM]]>,
@@ -162,8 +166,8 @@ fn ordered(a: u32, b: u32) -> (u32, u32) {
 
 static TABLE: OnceLock<ProbabilityTable> = OnceLock::new();
 
-/// The process-wide table, built on first use (3–5 ms; call it once at startup to keep that
-/// out of a time-critical frame).
+/// The process-wide table, built on first use (call it once at startup to keep the build out
+/// of a time-critical frame).
 #[inline]
 pub fn table() -> &'static ProbabilityTable {
     TABLE.get_or_init(ProbabilityTable::build)

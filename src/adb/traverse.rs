@@ -136,13 +136,18 @@ pub struct ContactWitness {
 pub struct AdbOutcome {
     /// Whether the meshes are reported as colliding.
     pub collides: bool,
-    /// Confidence that they collide, in `[0, 1]`: 1 for an exact hit, else
-    /// `1 − (Π (1 − p))^(1/r)` over the traversal's final frontier (the pairs queued, and the
-    /// leaf pairs and pruned pairs it did not expand), which together cover every overlapping
-    /// leaf pair, `r` = 2 disjoint pairs counting as one independent piece; 0 when
-    /// no pair was left (every overlapping pair was ruled out). With a calibrated estimator
-    /// it is meant to mean what it says: of the answers given with confidence about `p`, about
-    /// `p` collide (the `accuracy_vs_time` report's reliability curves check it). Under
+    /// Confidence that they collide, in `[0, 1]`: 1 for an exact hit (or a certificate from an
+    /// [exact](super::InteriorMap::is_exact) map), the certificate's confidence for one from
+    /// an approximate map, else `1 − (Π (1 − p))^(1/r)` over the traversal's final frontier
+    /// (the pairs queued, and the leaf pairs and pruned pairs it did not expand), which
+    /// together cover every overlapping leaf pair, `r` = 2 disjoint pairs counting as one
+    /// independent piece; 0 when no pair was left (every overlapping pair was ruled out).
+    ///
+    /// Short of 1 or 0 it is an estimate, not a guarantee. With a calibrated estimator the
+    /// pair probabilities are fitted on seeded near-contact poses of each mesh against itself
+    /// (of the pairs given about `p` there, about `p` hold intersecting triangles); how closely
+    /// the reported confidence follows the frequency of collisions on other poses is what the
+    /// `accuracy_vs_time` report's reliability curves show. Under
     /// [`Decision::Paper`] the answer follows the papers' rule, which ignores every pair below
     /// `p_min`: "no collision" may then come with a high confidence (the pairs below `p_min`
     /// together make a collision likely), and that disagreement is why that rule misses

@@ -7,18 +7,17 @@ use crate::mesh::TriMesh;
 /// Parameters of [`Bvh::build_with`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct BvhBuildOptions {
-    /// Largest number of triangles in a leaf (clamped to 1..=255). Smaller leaves cull more
-    /// triangle pairs but visit more nodes; 4 measured best for mesh–mesh queries.
+    /// Largest number of triangles in a leaf (clamped to 1..=255; 4 by default). Smaller
+    /// leaves cull more triangle pairs but visit more nodes.
     pub max_leaf_size: u32,
     /// Number of SAH bins per axis (clamped to 2..=32).
     pub bins: usize,
     /// Search split planes on all three axes (`true`) or only along the longest extent of the
-    /// centroids (`false`, the default: about twice as fast to build, and the trees answer
-    /// mesh–mesh queries as fast, as the `exact_vs_parry` bench shows).
+    /// centroids (`false`, the default: one axis binned per node instead of three).
     pub all_axes: bool,
     /// Build subtrees of at least this many triangles on separate threads (`usize::MAX`: never;
-    /// values below 1024 count as 1024, where a thread costs more than it saves). Threads are
-    /// only used when the machine has more than one core.
+    /// values below 1024 count as 1024: smaller subtrees are built on the thread that splits
+    /// them). Threads are only used when the machine has more than one core.
     pub parallel_threshold: usize,
 }
 
@@ -69,7 +68,7 @@ impl Bounds {
 }
 
 /// One triangle's box and index, 32 bytes. The build partitions these in place, so every pass
-/// reads memory in order (indirection through an index array was the build's main cost).
+/// reads memory in order (no indirection through an index array).
 #[derive(Clone, Copy)]
 #[repr(C)]
 struct Prim {

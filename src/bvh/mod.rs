@@ -14,6 +14,9 @@
 //! test of [`crate::geometry::triangles_intersect`]. Surfaces are what collide (as in parry):
 //! a mesh entirely inside another does not touch its surface. For closed meshes,
 //! [`ExactOptions::solid`] adds the containment check.
+//!
+//! Next: [`crate::adb`] builds on these trees for queries with a budget and a confidence;
+//! [`crate::tracking`] and [`crate::ccd`] use them for deforming and moving meshes.
 
 pub(crate) mod box_test;
 mod build;

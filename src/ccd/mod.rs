@@ -12,6 +12,12 @@
 //! that never misses a root: the answer is never later than the first contact, and no earlier
 //! than the last moment the features were more than a stated distance tolerance apart (see
 //! [`CcdOptions`]). Both trees are descended together over the boxes their nodes sweep.
+//!
+//! The plugin does not call these queries yet; call them from a system of your own for the
+//! bodies that move far in one step.
+//!
+//! Next: [`crate::ecs`], the Bevy plugin that runs the discrete queries every step.
+
 mod inclusion;
 mod primitive;
 mod query;

@@ -169,7 +169,8 @@ pub enum Fidelity {
     /// The time-critical ADB traversal with this confidence target, cut by the pair's slice
     /// of the frame budget: the answer carries its probability.
     Adb {
-        /// Confidence the answer needs (the papers use 0.99; lower is faster).
+        /// Confidence the answer needs (the papers use 0.99; lower: the traversal may stop
+        /// sooner, on weaker evidence).
         p_min: f64,
     },
     /// Stochastic closest-feature tracking (contacts with points, normals and depths),

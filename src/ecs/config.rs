@@ -45,24 +45,25 @@ pub struct CollisionConfig {
     /// certain collision whose contact comes from the triangle pair (a good normal and depth);
     /// without, contacts come from the most probable node pair.
     pub adb_exact_leaves: bool,
-    /// How ADB traversals decide ([`Decision`]). With exact leaves the two rules cost the same
-    /// within the noise (the `accuracy_vs_time` report; the `profile` example's pile with
-    /// `--adb-decision`); [`Decision::Confidence`], the default, more often ends a colliding
-    /// query at an exact leaf hit, whose contact comes from the triangle pair.
+    /// How ADB traversals decide ([`Decision`]). [`Decision::Confidence`], the default, more
+    /// often ends a colliding query at an exact leaf hit, whose contact comes from the triangle
+    /// pair, than [`Decision::Evidence`], which may stop earlier on a contact region (the
+    /// `accuracy_vs_time` report and the `profile` example's `--adb-decision` compare them).
     #[reflect(remote = super::reflect::DecisionReflect)]
     pub adb_decision: Decision,
     /// In which order ADB traversals expand node pairs ([`Order`]). The default,
     /// [`Order::Straddle`], dives to a first intersecting triangle pair and, with exact leaves,
-    /// estimates only the pairs its evidence checks and its confidence need: the fastest
-    /// order on the `accuracy_vs_time` report's poses, at the same error. Without exact leaves
-    /// every pair is estimated whatever the order, and only the ranking differs.
+    /// estimates only the pairs its evidence checks and its confidence need (the
+    /// `accuracy_vs_time` report compares the orders). Without exact leaves every pair is
+    /// estimated whatever the order, and only the ranking differs.
     #[reflect(remote = super::reflect::OrderReflect)]
     pub adb_order: Order,
     /// The confidence from which an ADB answer that its traversal did not settle (its slice
     /// ran out, or leaf pairs were left to their estimates) counts as a collision
     /// ([`AdbQuery::collide_at`](crate::adb::AdbQuery::collide_at); ½ by default, the fewest
-    /// errors). Lower it where a missed contact costs more than a false one, as the
-    /// `cannonball` example does for shots that would otherwise pass through the wall.
+    /// errors when the confidence is calibrated). Lower it where a missed contact costs more
+    /// than a false one, as the `cannonball` example does for shots that would otherwise pass
+    /// through the wall.
     pub adb_collide_at: f64,
     /// ADB queries first try the interpenetration certificate
     /// ([`AdbQuery::interior_after`](crate::adb::AdbQuery::interior_after)): a deep overlap is
@@ -70,7 +71,7 @@ pub struct CollisionConfig {
     /// found inside the other mesh. On by default. Turn it off for scenes of small objects
     /// against thin parts (a ball against walls a few voxels thick): samples seldom land
     /// inside such parts, so it settles little there and costs its lookups on every pair (the
-    /// `cannonball` example runs without it: half as much narrow-phase time again with it).
+    /// `cannonball` example runs without it unless its last argument is `on`).
     pub adb_interior: bool,
     /// Node pairs every tested ADB pair gets whatever the budget (the root pair is always
     /// expanded). Under a time budget a tested pair gets at least an eighth of `max_slice`
@@ -87,7 +88,7 @@ pub struct CollisionConfig {
     /// How far a collider may move before the broad phase looks at it again, as a fraction
     /// of its world box's largest extent: its broad-phase (fat) box is its world box grown
     /// by this much and stretched along six times its last motion. Larger: fewer broad-phase
-    /// updates, more pairs to check for overlapping world boxes (a few nanoseconds each).
+    /// updates, more pairs whose world boxes are checked for overlap.
     pub proxy_margin: f32,
     /// Write a [`Contact`](super::Contact) message per contact point of every pair answered
     /// in a run (off by default: contacts are read through

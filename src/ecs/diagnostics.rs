@@ -237,6 +237,8 @@ pub(crate) fn end_frame(diag: &mut CollisionDiagnostics, config: &CollisionConfi
 /// paths `stochastic_collision/<stage>` in µs (a stage that did not run adds no measurement) and
 /// `stochastic_collision/collision` (Prepare to Report). Add bevy_diagnostic's
 /// `DiagnosticsPlugin` to the app to collect them.
+///
+/// Next: [`CollisionDiagnostics`], the same timings and the work counters as a resource.
 #[cfg(feature = "diagnostic")]
 pub mod store {
     use bevy_app::App;

@@ -38,13 +38,19 @@
 //!    your own systems, consuming contacts by priority within the response budget.
 //!
 //! A stage runs only when some entity needs it; [`CollisionDiagnostics`] has each stage's time
-//! (`None` when it did not run) and the work done. A scene at rest costs almost nothing.
+//! (`None` when it did not run) and the work done. In a scene at rest (no collider changed)
+//! the broad phase does not sweep, and the narrow phase works only on the pairs still waiting
+//! for a test.
 //!
 //! # Determinism
 //! Pairs are processed in parallel and recorded in an order that depends only on the history
 //! of the tables; with a [`FrameBudget::NodePairs`] budget (or none), a run gives the same
 //! events for any number of threads. A [`FrameBudget::Time`] budget adapts to the machine's
 //! speed, so its results depend on timing.
+//!
+//! Next: [`CollisionConfig`] (budgets, ADB settings, contacts), [`Fidelity`] (how each pair
+//! is answered) and [`CollisionPairs`] (reading contacts); the `pile`, `cannonball`, `cloth`
+//! and `intestine` examples run whole scenes.
 #[cfg(feature = "bevy_mesh")]
 mod bevy_mesh;
 mod broad_phase;

@@ -3,6 +3,16 @@
 //! Storage is `f32` (glam, as Bevy holds it); every computation whose *sign* decides an answer
 //! runs in `f64` with exact adaptive predicates ([`robust`]), so results stay right on touching,
 //! coplanar and degenerate input, at any scale and far from the origin.
+//!
+//! - [`Aabb`]: an axis-aligned box; [`Pose`]: a rigid transform (rotation, then translation),
+//!   one per mesh in every query.
+//! - [`triangles_intersect`]: the exact test of two closed triangles (touching counts), which
+//!   decides every triangle pair of the exact queries.
+//! - [`closest_points_triangle_triangle`], [`closest_points_segment_segment`] and
+//!   [`closest_point_on_triangle`]: distances and closest points.
+//! - [`predicates`]: the exact orientation predicates underneath.
+//!
+//! Next: [`crate::bvh`] runs these tests over whole meshes.
 
 mod aabb;
 mod closest_points;

@@ -1,5 +1,7 @@
 //! Exact orientation predicates on `f64` points (adaptive, via [`robust`]): the sign of the
 //! result is always right, whatever the rounding of a direct evaluation would say.
+//!
+//! Next: [`crate::bvh`], whose queries end in these tests.
 use glam::DVec3;
 use robust::{Coord3D, orient3d as robust_orient3d};
 

@@ -8,6 +8,9 @@
 //!
 //! # Panics
 //! Every generator panics if a size is NaN or infinite (the mesh would not be valid).
+//!
+//! Next: [`crate::bvh::CollisionMesh`] turns a generated mesh into a collider of the exact
+//! queries, [`crate::ecs::MeshCollider`] into a collider of the plugin.
 
 use std::collections::HashMap;
 use std::f32::consts::TAU;

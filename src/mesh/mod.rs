@@ -5,6 +5,9 @@
 //! non-manifold edges are all *valid* input: every query in this crate stays correct on them.
 //! Only what cannot be a mesh is refused ([`MeshError`]): no triangles, an index out of range,
 //! a coordinate that is NaN or infinite, an unreadable or malformed file.
+//!
+//! Next: [`crate::geometry`], the exact primitives the queries decide with; or
+//! [`crate::bvh`], which wraps a mesh in the tree every query descends.
 
 mod combine;
 mod error;

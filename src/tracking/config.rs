@@ -33,8 +33,9 @@ pub enum SearchMode {
 /// thresholds from a mesh's own edge length and size.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackerConfig {
-    /// New random pairs per frame (the papers' `n`): the cost of a frame grows linearly with
-    /// it, and so does the chance of finding a new contact region.
+    /// New random pairs per frame (the papers' `n`): the pair work of a frame grows linearly
+    /// with it, and so does the chance of finding a new contact region (what else a frame
+    /// costs grows with the mesh: see [the module docs](super#what-a-frame-costs)).
     pub pairs_per_frame: usize,
     /// Where new pairs come from.
     pub sampling: Sampling,
@@ -50,7 +51,7 @@ pub struct TrackerConfig {
     /// Guy and Debunne's `ε`, as a fraction of the object size (box diagonal).
     pub far_epsilon: f32,
     /// Self-collision ignores pairs of triangles within this many vertex rings of each other
-    /// (0: sharing a vertex; 1, the default: also joined by an edge). On irregular meshes,
+    /// (0: sharing a vertex; 1: also joined by an edge; 2 by default). On irregular meshes,
     /// triangles one ring apart can be closer than a tenth of an edge without any fold.
     pub exclusion_rings: u32,
     /// Two pairs whose features are within this many vertex rings of each other, on both

@@ -1,14 +1,14 @@
 //! Stochastic closest-feature tracking for deforming, non-convex and self-colliding meshes
 //! (Raghupathi et al. 2004, Guy and Debunne 2004, Kimmerle et al. 2004).
 //!
-//! Instead of testing every pair of primitives, a [`Tracker`] keeps a small list of feature
+//! Instead of testing every pair of primitives, a [`Tracker`] keeps a bounded list of feature
 //! pairs (vertex, edge or triangle of each mesh) that are *locally* closest, and updates it
-//! every frame in a small, fixed time: new random pairs are drawn (uniformly, by velocity, or
-//! inside the overlapping patches of a shallow hierarchy), each pair descends to a locally
-//! closest pair through the mesh topology, unwanted pairs are pruned, and the pairs closer
-//! than the surfaces' thickness are reported as [`Contact`]s, extended by propagation to
-//! their neighbourhood. Pairs persist across frames, so a contact found once is followed as
-//! the surfaces move.
+//! every frame: new random pairs are drawn (uniformly, by velocity, or inside the overlapping
+//! patches of a shallow hierarchy), each pair descends to a locally closest pair through the
+//! mesh topology, unwanted pairs are pruned, and the pairs closer than the surfaces' thickness
+//! are reported as [`Contact`]s, extended by propagation to their neighbourhood. Pairs persist
+//! across frames, so a contact found once is followed as the surfaces move. The answer is
+//! approximate: a contact region no pair has reached yet is not reported.
 //!
 //! - [`TrackedSurface`]: a mesh prepared for tracking (topology, sampling tables, patches);
 //!   deform it with [`TrackedSurface::set_positions`].
@@ -16,8 +16,21 @@
 //!   ([`Tracker::step_pair`]) or one mesh against itself ([`Tracker::step_self`]).
 //! - [`TrackerConfig`]: pairs per frame, sampling, search variant, thickness, thresholds, seed.
 //!
-//! What it costs and misses against the exact self-collision pass
+//! # What a frame costs
+//! The work on feature pairs is bounded by the configuration, not by the mesh:
+//! [`TrackerConfig::pairs_per_frame`] new pairs, at most [`TrackerConfig::max_active_pairs`]
+//! kept ones, each searched for at most [`TrackerConfig::max_iterations`] steps, at most
+//! [`TrackerConfig::propagation_limit`] propagated contacts. The rest of a frame grows with
+//! the mesh: [`TrackedSurface::set_positions`] refits the whole patch tree and every
+//! triangle normal, [`Sampling::Hierarchy`] traverses every overlapping patch pair,
+//! [`Sampling::Velocity`] weighs every triangle, and self-collision's crease probes scan every
+//! edge for folds. A deadline ([`Tracker::step_self_until`]) cuts the searching, not that
+//! work. What tracking finds and misses against the exact self-collision pass
 //! ([`crate::bvh::self_contacts`]) is measured by `examples/tracking_quality.rs`.
+//!
+//! Next: [`crate::ccd`], continuous collision over a time step; or [`crate::ecs`], whose
+//! plugin runs a tracker for every pair and self-colliding mesh with
+//! [`Fidelity::Tracking`](crate::ecs::Fidelity::Tracking).
 
 mod config;
 mod contact;

@@ -191,7 +191,7 @@ impl Tracker {
     /// eighth of them searched, each kept pair searched every eighth step and otherwise only
     /// re-measured on its current features (one evaluation), an eighth of the collision
     /// propagation ([`StepStats::cut`], [`StepStats::remeasured`]). Accuracy degrades (pairs
-    /// converge more slowly, new contacts are found later), frame time much less; a tracker
+    /// converge more slowly, new contacts are found later), frame time less; a tracker
     /// that is always late still finds and follows its contacts. With a deadline the result
     /// depends on timing; `None` (no deadline) is [`step_self`](Self::step_self), reproducible.
     pub fn step_self_until(

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# Reruns every stored run the README and docs/ quote, writing each output where the docs read it.
+# Needs ../shared/assets/meshes beside the project. Long (about an hour on 2 cores, most of it the
+# plugin's runs and the large tracking meshes); run it on a quiet machine, since timings are
+# stored. Usage: docs/regenerate.sh [adb|performance|ccd|tracking|plugin]... (default: all)
+#
+# Each docs/<topic>.md names the command of each figure; this script is those commands in one place.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+meshes=${STOCHASTIC_COLLISION_MESHES:-../shared/assets/meshes}
+topics=("$@")
+[ ${#topics[@]} -eq 0 ] && topics=(adb performance ccd tracking plugin)
+
+adb() { # docs/adb.md: the accuracy-against-time report
+  cargo run --release --quiet --example accuracy_vs_time -- --full --poses 300 \
+    --out docs/adb/report 2> >(tr '\r' '\n' | grep 'ADB build [0-9]' | sed 's/^ *//' \
+    > docs/adb/report/build.txt) | tee docs/adb/report/output.txt
+}
+
+performance() { # docs/performance.md: the exact query against parry3d
+  mkdir -p docs/performance
+  { echo "\$ cargo bench --bench exact_vs_parry -- nomatch"
+    cargo bench --quiet --bench exact_vs_parry -- nomatch 2>/dev/null; } |
+    tee docs/performance/exact_vs_parry.txt
+}
+
+ccd() { # docs/ccd.md: continuous collision against the discrete query and parry3d
+  { echo "\$ cargo bench --bench ccd"; cargo bench --quiet --bench ccd 2>/dev/null; } |
+    tee docs/ccd/bench.txt
+}
+
+tracking() { # docs/tracking.md: tracking against the exact self-collision pass
+  local q="cargo run --release --quiet --example tracking_quality --"
+  # Training meshes (the tracker's constants were chosen on these, seed 1).
+  $q --frames 480 --sweep 16,32,64,128,256 --out-dir docs/tracking/generated_tube \
+    --json docs/tracking/generated_tube/result.json
+  $q --mesh "$meshes/plane_50x50.obj" --frames 480 --sweep 16,32,64,128,256 --pairs-per-frame 64 \
+    --out-dir docs/tracking/plane_50x50 --json docs/tracking/plane_50x50/result.json
+  $q --mesh "$meshes/large-intestine-sf+-hf-.obj" --frames 120 --sweep 16,32,64,128,256 \
+    --pairs-per-frame 64 --out-dir "docs/tracking/large-intestine-sf+-hf-" \
+    --json "docs/tracking/large-intestine-sf+-hf-/result.json"
+  $q --mesh "$meshes/small_intestine_100k.obj" --frames 120 --sweep 128,256,384,512 \
+    --pairs-per-frame 384 --out-dir docs/tracking/small_intestine_100k \
+    --json docs/tracking/small_intestine_100k/result.json
+  # Held out: meshes it was not tuned on, other seeds, the default 64 pairs per frame.
+  : > docs/tracking/held_out/output.txt
+  for mesh in bunny teapot suzanne spot large_intestine_20k; do
+    for seed in 3 4 5; do
+      echo "== $mesh seed $seed" | tee -a docs/tracking/held_out/output.txt
+      $q --mesh "$meshes/$mesh.obj" --frames 120 --seed "$seed" --no-sweep \
+        --out-dir "target/tracking_held_out/$mesh-$seed" \
+        --json "docs/tracking/held_out/$mesh-seed$seed.json" | tee -a docs/tracking/held_out/output.txt
+    done
+  done
+}
+
+plugin() { # docs/plugin.md: the plugin's stage timings (docs/plugin/measure.sh)
+  docs/plugin/measure.sh
+}
+
+for topic in "${topics[@]}"; do
+  echo "=== $topic"
+  "$topic"
+done
