@@ -11,10 +11,19 @@ meshes=${STOCHASTIC_COLLISION_MESHES:-../shared/assets/meshes}
 topics=("$@")
 [ ${#topics[@]} -eq 0 ] && topics=(adb performance ccd tracking plugin)
 
-adb() { # docs/adb.md: the accuracy-against-time report
-  cargo run --release --quiet --example accuracy_vs_time -- --full --poses 300 \
-    --out docs/adb/report 2> >(tr '\r' '\n' | grep 'ADB build [0-9]' | sed 's/^ *//' \
-    > docs/adb/report/build.txt) | tee docs/adb/report/output.txt
+adb() { # docs/adb.md: the accuracy-against-time report (each mesh against itself, the
+  # evaluation seed and a held-out seed) and held-out pairs of different meshes
+  local r="cargo run --release --quiet --example accuracy_vs_time --"
+  run_adb() { # out-dir args...
+    local out=$1
+    shift
+    mkdir -p "$out"
+    $r "$@" --out "$out" 2> >(tr '\r' '\n' | grep 'ADB build [0-9]' | sed 's/^ *//' \
+      > "$out/build.txt") | tee "$out/output.txt"
+  }
+  run_adb docs/adb/report --full --poses 300
+  run_adb docs/adb/seed7 --full --poses 300 --seed 7
+  run_adb docs/adb/pairs --pairs --poses 300
 }
 
 performance() { # docs/performance.md: the exact query against parry3d

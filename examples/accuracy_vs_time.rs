@@ -4,8 +4,8 @@
 //! Two copies of a mesh at random orientations approach each other along random directions;
 //! each pose sits at a random offset from first contact (in units of the mesh's size, the
 //! diagonal of its box). Every pose is answered exactly (ground truth, timed), by the exact query
-//! preceded by the interpenetration certificate ("certificate + exact": what the certificate alone
-//! is worth), and by ADB-trees over a sweep of `p_min`, `k_min`, time and node budgets,
+//! preceded by the interpenetration certificate where its map is exact ("certificate + exact":
+//! `certified_intersects`, the fastest exact query of the crate), and by ADB-trees over a sweep of `p_min`, `k_min`, time and node budgets,
 //! estimators, orders and the certificate on or off ("no-interior"). Only poses whose root boxes
 //! overlap count (as in the papers).
 //!
@@ -15,9 +15,15 @@
 //! of its median pass.
 //!
 //! ```text
-//! cargo run --release --example accuracy_vs_time -- [--full] [--poses N] [--out DIR] [--meshes a,b,...]
-//!     [--resolution R] [--fill F] [--interior-resolution R] [--interior-samples N]
+//! cargo run --release --example accuracy_vs_time -- [--full] [--pairs] [--seed S] [--poses N]
+//!     [--out DIR] [--meshes a,b,...] [--resolution R] [--fill F] [--interior-resolution R]
+//!     [--interior-samples N]
 //! ```
+//!
+//! `--pairs`: instead of each mesh against itself, held-out pairs of *different* meshes
+//! (`support/mesh_pairs.rs`: one 10–30× the other, smooth scans against spiky and thin shapes,
+//! CAD-like generated parts; the first of a pair is the smaller, and offsets are in units of its
+//! size). `--seed`: the evaluation poses' seed (default 0xACC0).
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh, 600 poses each (`docs/adb.md`'s figures: `--full --poses 300`). Writes
@@ -42,14 +48,16 @@ use std::time::{Duration, Instant};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, InteriorMap,
-    MAX_SURFACE_SAMPLES, Order, PlanarityEstimator, adb_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, MAX_SURFACE_SAMPLES, Order,
+    PlanarityEstimator, adb_intersects, certified_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects, root_boxes_overlap};
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::{TriMesh, generate};
 use stochastic_collision::poses::near_contact_poses;
 
+#[path = "support/mesh_pairs.rs"]
+mod mesh_pairs;
 #[path = "support/oracle_descent.rs"]
 mod oracle_descent;
 #[path = "support/progress.rs"]
@@ -84,7 +92,14 @@ struct Settings {
     out: PathBuf,
     meshes: Option<Vec<String>>,
     build: AdbBuildOptions,
+    /// Pairs of different meshes (`mesh_pairs`) instead of each mesh against itself.
+    pairs: bool,
+    /// Seed of the evaluation poses.
+    seed: u64,
 }
+
+/// The evaluation poses' default seed (not the seeds of the calibration's training poses).
+const EVALUATION_SEED: u64 = 0xACC0;
 
 fn parse_args() -> Result<Settings, String> {
     let mut s = Settings {
@@ -93,11 +108,20 @@ fn parse_args() -> Result<Settings, String> {
         out: PathBuf::from("target/accuracy_vs_time"),
         meshes: None,
         build: AdbBuildOptions::default(),
+        pairs: false,
+        seed: EVALUATION_SEED,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
         match flag.as_str() {
             "--full" => s.full = true,
+            "--pairs" => s.pairs = true,
+            "--seed" => {
+                s.seed = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .ok_or("--seed needs a whole number")?
+            }
             "--poses" => {
                 s.poses = it
                     .next()
@@ -147,8 +171,9 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --full, --poses N, --out DIR, --meshes a,b, \
-                     --resolution R, --fill F, --interior-resolution R, --interior-samples N)"
+                    "unknown argument `{other}` (known: --full, --pairs, --seed S, --poses N, --out DIR, \
+                     --meshes a,b, --resolution R, --fill F, --interior-resolution R, \
+                     --interior-samples N)"
                 ));
             }
         }
@@ -327,7 +352,8 @@ fn configs() -> Vec<Config> {
 /// The node budgets of the sweep (node pairs), ascending.
 const NODE_BUDGETS: [u64; 8] = [10, 20, 30, 40, 60, 100, 300, 1000];
 
-/// The exact query preceded by the interpenetration certificate (not an ADB configuration).
+/// `certified_intersects`: the exact query preceded by the interpenetration certificate where
+/// its map is exact (not an ADB configuration; always the exact answer).
 const CERTIFIED_EXACT_LABEL: &str = "certificate + exact";
 /// The default without the interpenetration certificate.
 const NO_INTERIOR_LABEL: &str = "calibrated p0.99 k10 no-interior";
@@ -358,12 +384,32 @@ const TARGET_BUDGET_ERROR: f64 = 10.0;
 /// The budget of [`BUDGET_20_LABEL`], in µs.
 const BUDGET_20_US: f64 = 20.0;
 
-fn meshes(settings: &Settings) -> Vec<(String, TriMesh)> {
-    let shared_dir = std::env::var_os("STOCHASTIC_COLLISION_MESHES")
+/// Where the shared meshes are (`STOCHASTIC_COLLISION_MESHES`, else `../shared/assets/meshes`).
+fn shared_dir() -> PathBuf {
+    std::env::var_os("STOCHASTIC_COLLISION_MESHES")
         .map(PathBuf::from)
         .unwrap_or_else(|| {
             PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/meshes")
-        });
+        })
+}
+
+/// The cases of the report: each mesh against itself (no second mesh), or with `--pairs` the
+/// held-out pairs of different meshes.
+fn cases(settings: &Settings) -> Vec<(String, TriMesh, Option<TriMesh>)> {
+    if settings.pairs {
+        return mesh_pairs::held_out_pairs(&shared_dir())
+            .into_iter()
+            .map(|p| (p.name, p.first, Some(p.second)))
+            .collect();
+    }
+    meshes(settings)
+        .into_iter()
+        .map(|(name, mesh)| (name, mesh, None))
+        .collect()
+}
+
+fn meshes(settings: &Settings) -> Vec<(String, TriMesh)> {
+    let shared_dir = shared_dir();
     let mut names: Vec<&str> = vec!["icosphere_20k", "torus_32k", "bunny"];
     if settings.full {
         names = vec![
@@ -408,8 +454,9 @@ struct Answer {
 struct PoseRecord {
     offset: f32,
     exact: Answer,
-    /// The exact query preceded by the interpenetration certificate (exact or not as the
-    /// mesh's interior map is): what the certificate alone is worth to an exact query.
+    /// `certified_intersects`: the exact query preceded by the interpenetration certificate
+    /// where its map is exact; always the exact answer, found sooner where the certificate
+    /// settles it.
     certified_exact: Answer,
     adb: Vec<Answer>,
     /// Node pairs of the oracle descent ([`oracle_descent_pairs`]); `None` if not colliding.
@@ -423,12 +470,8 @@ fn progress_bar(label: &str, done: usize, total: usize) {
     }
 }
 
-fn run_mesh(
-    name: &str,
-    mesh: TriMesh,
-    poses: usize,
-    build: AdbBuildOptions,
-) -> (Vec<PoseRecord>, usize) {
+/// Builds an ADB-tree with a progress bar; prints its size and build time.
+fn build_tree(name: &str, mesh: TriMesh, build: AdbBuildOptions) -> AdbTree {
     let cm = CollisionMesh::new(mesh);
     let total_nodes = cm.bvh().nodes().len();
     let start = Instant::now();
@@ -449,20 +492,43 @@ fn run_mesh(
         build_s,
         tris as f64 / build_s / 1e3
     );
+    tree
+}
+
+/// Answers every pose of one case: `mesh` against itself, or against `second` (poses of the
+/// second in the first's frame, offsets in units of the first's size). Returns the records and
+/// the case's triangle count (the larger mesh's).
+fn run_mesh(
+    name: &str,
+    mesh: TriMesh,
+    second: Option<TriMesh>,
+    poses: usize,
+    build: AdbBuildOptions,
+    seed: u64,
+) -> (Vec<PoseRecord>, usize) {
+    let tree = build_tree(name, mesh, build);
+    // Against itself the second tree is the same object (what its fitted calibration is for).
+    let second_tree = second.map(|m| build_tree(&format!("{name} (second)"), m, build));
+    let tree_b = second_tree.as_ref().unwrap_or(&tree);
+    let tris = tree
+        .collision_mesh()
+        .mesh()
+        .triangle_count()
+        .max(tree_b.collision_mesh().mesh().triangle_count());
     let configs = configs();
     let cm = tree.collision_mesh();
+    let cm_b = tree_b.collision_mesh();
     // Evaluation poses: a different seed from the fit's training poses. Only poses whose root
     // boxes overlap count, as in the papers.
-    let approach: Vec<_> = near_contact_poses(cm, cm, poses, SPREAD, 0xACC0)
+    let approach: Vec<_> = near_contact_poses(cm, cm_b, poses, SPREAD, seed)
         .into_iter()
-        .filter(|p| root_boxes_overlap(cm, &Pose::IDENTITY, cm, &p.pose))
+        .filter(|p| root_boxes_overlap(cm, &Pose::IDENTITY, cm_b, &p.pose))
         .collect();
     let mut exact_ws = QueryWorkspace::new();
     let mut adb_ws = AdbWorkspace::new();
     // runs[method][pose]: one answer per timing pass; method 0 is the exact query, the last
     // one the exact query preceded by the interpenetration certificate.
     let methods = configs.len() + 2;
-    let interior = tree.interior();
     let mut runs = vec![vec![Vec::with_capacity(TIMING_PASSES); approach.len()]; methods];
     let steps = TIMING_PASSES * methods;
     for pass in 0..TIMING_PASSES {
@@ -472,27 +538,22 @@ fn run_mesh(
             for (p, pose_runs) in approach.iter().zip(method_runs.iter_mut()) {
                 let t = Instant::now();
                 let answer = if m == 0 || m == methods - 1 {
-                    let certified = m > 0
-                        && interior.is_some_and(|map| {
-                            InteriorMap::certify_pair(map, map, &p.pose).is_some()
-                        });
-                    let hit =
-                        certified || intersects(cm, &Pose::IDENTITY, cm, &p.pose, &mut exact_ws);
+                    let hit = if m == 0 {
+                        intersects(cm, &Pose::IDENTITY, cm_b, &p.pose, &mut exact_ws)
+                    } else {
+                        certified_intersects(&tree, &Pose::IDENTITY, tree_b, &p.pose, &mut exact_ws)
+                    };
                     Answer {
                         collides: hit,
                         probability: if hit { 1.0 } else { 0.0 },
                         time_ns: t.elapsed().as_nanos() as f64,
-                        nodes: if certified {
-                            0
-                        } else {
-                            exact_ws.node_pairs_visited()
-                        },
+                        nodes: exact_ws.node_pairs_visited(),
                     }
                 } else {
                     let o = adb_intersects(
                         &tree,
                         &Pose::IDENTITY,
-                        &tree,
+                        tree_b,
                         &p.pose,
                         &configs[m - 1].query,
                         &mut adb_ws,
@@ -515,6 +576,7 @@ fn run_mesh(
         pose_runs[pose_runs.len() / 2]
     };
     let depths = LeafDepths::new(cm);
+    let depths_b = LeafDepths::new(cm_b);
     let mut hits = Vec::new();
     let records = approach
         .iter()
@@ -528,7 +590,7 @@ fn run_mesh(
                 .collect(),
             oracle_pairs: oracle_descent_pairs(
                 (cm, &depths),
-                (cm, &depths),
+                (cm_b, &depths_b),
                 &p.pose,
                 &mut exact_ws,
                 &mut hits,
@@ -614,8 +676,15 @@ fn main() {
     let mut all: BTreeMap<String, Vec<PoseRecord>> = BTreeMap::new();
     let mut triangles: BTreeMap<String, usize> = BTreeMap::new();
     let mut order = Vec::new();
-    for (name, mesh) in meshes(&settings) {
-        let (records, tris) = run_mesh(&name, mesh, settings.poses, settings.build);
+    for (name, mesh, second) in cases(&settings) {
+        let (records, tris) = run_mesh(
+            &name,
+            mesh,
+            second,
+            settings.poses,
+            settings.build,
+            settings.seed,
+        );
         order.push(name.clone());
         triangles.insert(name.clone(), tris);
         all.insert(name, records);

@@ -18,6 +18,8 @@
 //! - [`InteriorMap`]: the interpenetration certificate that [`AdbQuery::interior_after`]
 //!   tries first: a surface sample of one mesh inside the other and one of the same
 //!   connected surface outside it prove that the surfaces cross.
+//! - [`certified_intersects`]: the exact query with that certificate as a pre-pass, trusted
+//!   only in exact maps: always the answer of [`crate::bvh::intersects`], often sooner.
 //!
 //! # Which answers are certain
 //! "Collision" is certain (probability 1) when an exact leaf test found an intersecting
@@ -39,6 +41,7 @@ mod build;
 mod calibration;
 pub mod cells;
 mod certificate_confidence;
+mod certified;
 mod clearance;
 mod confidence_fit;
 mod descent;
@@ -59,6 +62,7 @@ mod voxel_map;
 
 pub use calibration::{Calibration, ConfidenceCalibration, DEPTH_BUCKETS, RAW_BINS};
 pub use certificate_confidence::CertificateReliability;
+pub use certified::certified_intersects;
 pub use estimator::{
     CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator, PlanarityEstimator,
     eq9_probability,
