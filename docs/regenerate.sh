@@ -24,6 +24,7 @@ adb() { # docs/adb.md: the accuracy-against-time report (each mesh against itsel
   run_adb docs/adb/report --full --poses 300
   run_adb docs/adb/seed7 --full --poses 300 --seed 7
   run_adb docs/adb/pairs --pairs --poses 300
+  run_adb docs/adb/shallow --full --poses 300 --spread 0.02
 }
 
 performance() { # docs/performance.md: the exact query against parry3d

@@ -15,7 +15,7 @@
 //! of its median pass.
 //!
 //! ```text
-//! cargo run --release --example accuracy_vs_time -- [--full] [--pairs] [--seed S] [--poses N]
+//! cargo run --release --example accuracy_vs_time -- [--full] [--pairs] [--seed S] [--spread F] [--poses N]
 //!     [--out DIR] [--meshes a,b,...] [--resolution R] [--fill F] [--interior-resolution R]
 //!     [--interior-samples N]
 //! ```
@@ -23,7 +23,8 @@
 //! `--pairs`: instead of each mesh against itself, held-out pairs of *different* meshes
 //! (`support/mesh_pairs.rs`: one 10–30× the other, smooth scans against spiky and thin shapes,
 //! CAD-like generated parts; the first of a pair is the smaller, and offsets are in units of its
-//! size). `--seed`: the evaluation poses' seed (default 0xACC0).
+//! size). `--seed`: the evaluation poses' seed (default 0xACC0). `--spread F`: offsets from first
+//! contact within ±F of the size (default 0.15; 0.02 for shallow contacts only).
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
 //! `--full`: every shared mesh, 600 poses each (`docs/adb.md`'s figures: `--full --poses 300`). Writes
@@ -64,22 +65,32 @@ mod oracle_descent;
 mod progress;
 use oracle_descent::{LeafDepths, oracle_descent_pairs};
 
-/// Offsets from first contact are drawn uniformly in ±SPREAD × size.
-const SPREAD: f32 = 0.15;
+/// Offsets from first contact are drawn uniformly in ±spread × size: by default ±15 % (deep
+/// overlaps and poses well short of contact, as in the papers), `--spread` for others (±0.02:
+/// the shallow contacts a physics scene mostly sees).
+const DEFAULT_SPREAD: f32 = 0.15;
+static SPREAD: std::sync::OnceLock<f32> = std::sync::OnceLock::new();
+
+/// The run's spread of offsets from first contact (fraction of the size).
+fn spread() -> f32 {
+    *SPREAD.get().unwrap_or(&DEFAULT_SPREAD)
+}
 /// "Near contact": within 5 % of the size of first contact.
 const NEAR: f32 = 0.05;
 const DISTANCE_BINS: usize = 10;
 /// Width of a distance bin (fraction of the size).
-const DISTANCE_BIN_WIDTH: f32 = 2.0 * SPREAD / DISTANCE_BINS as f32;
+fn distance_bin_width() -> f32 {
+    2.0 * spread() / DISTANCE_BINS as f32
+}
 
 /// The distance bin of an offset from first contact.
 fn distance_bin(offset: f32) -> usize {
-    (((offset + SPREAD) / DISTANCE_BIN_WIDTH) as usize).min(DISTANCE_BINS - 1)
+    (((offset + spread()) / distance_bin_width()) as usize).min(DISTANCE_BINS - 1)
 }
 
 /// The centre offset of distance bin `i`.
 fn distance_bin_center(i: usize) -> f64 {
-    f64::from(-SPREAD + DISTANCE_BIN_WIDTH * (i as f32 + 0.5))
+    f64::from(-spread() + distance_bin_width() * (i as f32 + 0.5))
 }
 /// Passes over all poses per method; a query's time is its median over the passes (an odd
 /// number, so the median is one pass's time; more passes make the ratios steadier from run to
@@ -116,6 +127,14 @@ fn parse_args() -> Result<Settings, String> {
         match flag.as_str() {
             "--full" => s.full = true,
             "--pairs" => s.pairs = true,
+            "--spread" => {
+                let v = it
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .filter(|f: &f32| *f > 0.0 && *f <= 1.0)
+                    .ok_or("--spread needs a fraction in (0, 1]")?;
+                SPREAD.set(v).map_err(|_| "--spread given twice")?;
+            }
             "--seed" => {
                 s.seed = it
                     .next()
@@ -171,7 +190,7 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --full, --pairs, --seed S, --poses N, --out DIR, \
+                    "unknown argument `{other}` (known: --full, --pairs, --seed S, --spread F, --poses N, --out DIR, \
                      --meshes a,b, --resolution R, --fill F, --interior-resolution R, \
                      --interior-samples N)"
                 ));
@@ -520,7 +539,7 @@ fn run_mesh(
     let cm_b = tree_b.collision_mesh();
     // Evaluation poses: a different seed from the fit's training poses. Only poses whose root
     // boxes overlap count, as in the papers.
-    let approach: Vec<_> = near_contact_poses(cm, cm_b, poses, SPREAD, seed)
+    let approach: Vec<_> = near_contact_poses(cm, cm_b, poses, spread(), seed)
         .into_iter()
         .filter(|p| root_boxes_overlap(cm, &Pose::IDENTITY, cm_b, &p.pose))
         .collect();
@@ -1410,7 +1429,10 @@ fn plot_error_vs_distance(
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(50)
-            .build_cartesian_2d(f64::from(-SPREAD)..f64::from(SPREAD), 0.0f64..emax * 1.1)?;
+            .build_cartesian_2d(
+                f64::from(-spread())..f64::from(spread()),
+                0.0f64..emax * 1.1,
+            )?;
         chart
             .configure_mesh()
             .x_desc(OFFSET_AXIS)
@@ -1460,11 +1482,11 @@ fn plot_time_vs_distance(
                     continue;
                 }
                 let (t, n) = (median(times), median(pairs));
-                let from = -SPREAD + DISTANCE_BIN_WIDTH * i as f32;
+                let from = -spread() + distance_bin_width() * i as f32;
                 writeln!(
                     csv,
                     "{name},{method},{from:.3},{:.3},{},{t:.3},{n}",
-                    from + DISTANCE_BIN_WIDTH,
+                    from + distance_bin_width(),
                     times.len()
                 )?;
                 tmin = tmin.min(t);
@@ -1492,7 +1514,7 @@ fn plot_time_vs_distance(
             .x_label_area_size(40)
             .y_label_area_size(50)
             .build_cartesian_2d(
-                f64::from(-SPREAD)..f64::from(SPREAD),
+                f64::from(-spread())..f64::from(spread()),
                 (tmin..tmax * 1.3).log_scale(),
             )?;
         chart
@@ -1630,7 +1652,12 @@ const OFFSET_AXIS: &str = "offset from first contact (fraction of size; < 0 over
 
 /// A tick of [`OFFSET_AXIS`]: the middle tick lands a rounding error off 0, so no "-0.00".
 fn offset_tick(v: &f64) -> String {
-    format!("{:.2}", if v.abs() < 1e-6 { 0.0 } else { *v })
+    let v = if v.abs() < 1e-6 { 0.0 } else { *v };
+    if spread() < 0.1 {
+        format!("{v:.3}")
+    } else {
+        format!("{v:.2}")
+    }
 }
 
 /// One curve per mesh (in palette order), then the legend at `position`.
