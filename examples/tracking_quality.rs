@@ -22,6 +22,8 @@
 //!
 //! JSON fields: `recall` (regions hit within 3 frames of their first appearance; regions that
 //! appear in the last 3 frames and are not hit yet are left out), `false_contact_rate`,
+//! `pair_coverage` (the exact contact triangle pairs, over all frames, with a reported contact
+//! whose triangles each share a vertex with the pair's),
 //! `regions`, `latency_frames_p95` (over the hit regions), `tracker_us_per_frame` (surface
 //! update + step), `exact_us_per_frame` (refit + exact pass), both in thread CPU time (the
 //! machine may be shared), `time_ratio`, `pairs_per_frame`,
@@ -33,7 +35,7 @@
 #[path = "support/progress.rs"]
 mod progress;
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -398,6 +400,10 @@ struct RunResult {
     latency_p95: f64,
     tracker_us: f64,
     exact_us: f64,
+    /// Exact contact triangle pairs, over all frames, with a reported contact whose two
+    /// triangles each share a vertex with (or are) the pair's, in either order: how much of
+    /// each region the tracker covers, not only whether it found the region.
+    pair_coverage: f64,
     /// Per frame: (contacts, false contacts, active pairs, µs, regions hit).
     per_frame: Vec<(usize, usize, usize, f64, usize)>,
 }
@@ -419,6 +425,9 @@ fn run_tracker(
     let mut total_us = 0.0;
     let mut per_frame = Vec::new();
     let mut near = Vec::new();
+    let topology = Topology::new(mesh);
+    let (mut exact_pairs, mut covered_pairs) = (0usize, 0usize);
+    let mut covered: HashSet<(u32, u32)> = HashSet::new();
     for (f, exact) in truth.frames.iter().enumerate() {
         whirl.positions(f, &mut positions);
         let t0 = cpu_us();
@@ -449,6 +458,21 @@ fn run_tracker(
         }
         reported += tracker.contacts().len();
         false_contacts += false_here;
+        // Untimed: the triangle pairs near a reported contact, then the exact pairs among them.
+        covered.clear();
+        for c in tracker.contacts() {
+            for x in one_ring(mesh, &topology, c.triangle_a) {
+                for y in one_ring(mesh, &topology, c.triangle_b) {
+                    covered.insert((x.min(y), x.max(y)));
+                }
+            }
+        }
+        exact_pairs += exact.triangle_pairs.len();
+        covered_pairs += exact
+            .triangle_pairs
+            .iter()
+            .filter(|&&(a, b)| covered.contains(&(a.min(b), a.max(b))))
+            .count();
         per_frame.push((
             tracker.contacts().len(),
             false_here,
@@ -461,7 +485,6 @@ fn run_tracker(
     let (mut counted, mut detected) = (0usize, 0usize);
     let mut latencies = Vec::new();
     let debug = std::env::var_os("TRACKING_QUALITY_DEBUG").is_some();
-    let topology = Topology::new(mesh);
     for (track, &t0) in truth.first_seen.iter().enumerate() {
         if debug && first_hit[track].is_none_or(|h| h - t0 > LATENCY_LIMIT) {
             let (frames_alive, max_points) = truth.frames.iter().fold((0, 0), |(n, m), fr| {
@@ -519,8 +542,28 @@ fn run_tracker(
         latency_p95: p95,
         tracker_us: total_us / frames as f64,
         exact_us: truth.frames.iter().map(|f| f.us).sum::<f64>() / frames as f64,
+        pair_coverage: if exact_pairs == 0 {
+            1.0
+        } else {
+            covered_pairs as f64 / exact_pairs as f64
+        },
         per_frame,
     }
+}
+
+/// Triangle `t` and every triangle sharing a vertex with it.
+fn one_ring<'a>(
+    mesh: &'a TriMesh,
+    topology: &'a Topology,
+    t: u32,
+) -> impl Iterator<Item = u32> + 'a {
+    let mut seen: Vec<u32> = mesh.triangles()[t as usize]
+        .iter()
+        .flat_map(|&v| topology.vertex_triangles(v).iter().copied())
+        .collect();
+    seen.sort_unstable();
+    seen.dedup();
+    seen.into_iter()
 }
 
 /// Vertex rings between two triangles (0: they share a vertex), up to `limit`.
@@ -548,10 +591,11 @@ fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32
 
 fn json_run(r: &RunResult) -> String {
     format!(
-        "\"pairs_per_frame\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
+        "\"pairs_per_frame\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
         r.pairs_per_frame,
         r.recall,
         r.false_contact_rate,
+        r.pair_coverage,
         r.regions,
         r.latency_p95,
         r.tracker_us,
@@ -681,15 +725,24 @@ fn main() {
         .unwrap_or_default();
 
     println!(
-        "{:>8} {:>8} {:>8} {:>8} {:>9} {:>12} {:>12} {:>7}",
-        "pairs/f", "recall", "false", "regions", "lat.p95", "tracker µs", "exact µs", "ratio"
+        "{:>8} {:>8} {:>8} {:>9} {:>8} {:>9} {:>12} {:>12} {:>7}",
+        "pairs/f",
+        "recall",
+        "false",
+        "coverage",
+        "regions",
+        "lat.p95",
+        "tracker µs",
+        "exact µs",
+        "ratio"
     );
     for r in &results {
         println!(
-            "{:>8} {:>8.3} {:>8.3} {:>8} {:>9.1} {:>12.0} {:>12.0} {:>7.3}",
+            "{:>8} {:>8.3} {:>8.3} {:>9.3} {:>8} {:>9.1} {:>12.0} {:>12.0} {:>7.3}",
             r.pairs_per_frame,
             r.recall,
             r.false_contact_rate,
+            r.pair_coverage,
             r.regions,
             r.latency_p95,
             r.tracker_us,
@@ -723,15 +776,16 @@ fn main() {
         );
     }
     let mut sweep_csv = String::from(
-        "pairs_per_frame,recall,false_contact_rate,regions,latency_frames_p95,tracker_us_per_frame,exact_us_per_frame\n",
+        "pairs_per_frame,recall,false_contact_rate,pair_coverage,regions,latency_frames_p95,tracker_us_per_frame,exact_us_per_frame\n",
     );
     for r in &results {
         let _ = writeln!(
             sweep_csv,
-            "{},{:.4},{:.4},{},{:.1},{:.1},{:.1}",
+            "{},{:.4},{:.4},{:.4},{},{:.1},{:.1},{:.1}",
             r.pairs_per_frame,
             r.recall,
             r.false_contact_rate,
+            r.pair_coverage,
             r.regions,
             r.latency_p95,
             r.tracker_us,
