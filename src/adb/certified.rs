@@ -13,10 +13,10 @@ use crate::geometry::Pose;
 /// [exact](InteriorMap::is_exact) (the mesh is closed: every edge used by an even number of
 /// triangles); a crossing found in an open mesh's map, a pose it does not settle, trees built
 /// without interior maps, and poses that are not finite all go to [`intersects`] (two open
-/// meshes skip the certificate's lookups altogether). So the
-/// answer never differs from the exact query's; only the time does, and most on deep
-/// overlaps, which the certificate settles with a few lookups. `ws` counts the node pairs the
-/// traversal visited ([`QueryWorkspace::node_pairs_visited`]): 0 when the certificate answered.
+/// meshes skip the certificate's lookups altogether). So the answer is the exact query's
+/// (`tests/adb_certified_exact.rs`); only the time differs, most on deep overlaps, which the
+/// certificate settles with a few lookups. `ws` counts the node pairs the traversal visited
+/// ([`QueryWorkspace::node_pairs_visited`]): 0 when the certificate answered.
 ///
 /// # Example
 /// ```
