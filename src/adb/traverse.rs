@@ -93,9 +93,10 @@ impl Default for AdbQuery {
 }
 
 impl AdbQuery {
-    /// Klein & Zachmann's method as published: [`PaperEstimator`] (depth-ratio curvature term),
-    /// `p_min = 0.99`, `k_min = 10`, the papers' decision rule, best-first order, no pruning
-    /// beyond `p = 0`, no triangle tests.
+    /// Our reconstruction of Klein & Zachmann's published rule: [`PaperEstimator`] (depth-ratio
+    /// curvature term), `p_min = 0.99`, `k_min = 10`, the papers' decision rule, best-first
+    /// order, no pruning beyond `p = 0`, no triangle tests. It runs on the trees as this crate
+    /// builds them (their fill fraction and normal slab), not as the papers build theirs.
     pub fn paper() -> Self {
         Self {
             estimator: Arc::new(PaperEstimator::default()),
