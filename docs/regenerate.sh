@@ -64,8 +64,9 @@ tracking() { # docs/tracking.md: tracking against the exact self-collision pass
   done
 }
 
-plugin() { # docs/plugin.md: the plugin's stage timings (docs/plugin/measure.sh)
+plugin() { # docs/plugin.md: the plugin's stage timings and the pile's response runs
   docs/plugin/measure.sh
+  docs/plugin/pile_response.sh
 }
 
 for topic in "${topics[@]}"; do

@@ -137,12 +137,13 @@ pub mod prelude {
         BevyMeshError, MeshColliderConstructor, MeshColliderConstructorHierarchy, MeshNameFilter,
     };
     pub use crate::ecs::{
-        BodyMass, BodyVelocity, ColliderPose, ColliderScale, CollisionConfig, CollisionDiagnostics,
-        CollisionEnded, CollisionError, CollisionPairs, CollisionSensor, CollisionStarted,
-        CollisionSystems, Contact, ContactLayer, ContactLayers, ContactQueue, Deformable, Fidelity,
-        FrameBudget, ImpulseResponsePlugin, MeshCollider, Method, ObserveCollisions, PairFilter,
-        PairFilterPlugin, PenaltyResponsePlugin, RefilterPairs, SelfCollision,
-        StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
+        BodyAngularVelocity, BodyInertia, BodyMass, BodyVelocity, ColliderPose, ColliderScale,
+        CollisionConfig, CollisionDiagnostics, CollisionEnded, CollisionError, CollisionPairs,
+        CollisionSensor, CollisionStarted, CollisionSystems, Contact, ContactLayer, ContactLayers,
+        ContactQueue, Deformable, Fidelity, FrameBudget, ImpulseResponsePlugin, MeshCollider,
+        Method, ObserveCollisions, PairFilter, PairFilterPlugin, PenaltyResponsePlugin,
+        RefilterPairs, SelfCollision, StochasticCollisionPlugin, StochasticCollisionPlugins,
+        TouchingEntities,
     };
     #[cfg(feature = "debug_render")]
     pub use crate::ecs::{CollisionDebugPlugin, CollisionGizmos};

@@ -18,8 +18,8 @@ use serde::de::DeserializeSeed;
 use stochastic_collision::adb::{Decision, Order};
 use stochastic_collision::bvh::TrianglePair;
 use stochastic_collision::ecs::{
-    BodyMass, BodyVelocity, CollisionCounters, FeaturePairs, ImpulseSettings, PenaltySettings,
-    Rest, Stage, StageRecord,
+    BodyAngularVelocity, BodyInertia, BodyMass, BodyVelocity, CollisionCounters, FeaturePairs,
+    ImpulseSettings, PenaltySettings, Rest, Stage, StageRecord,
 };
 use stochastic_collision::prelude::*;
 
@@ -66,6 +66,8 @@ fn every_public_type_is_registered_with_its_ecs_data() {
         TypeId::of::<FeaturePairs>(),
         TypeId::of::<BodyVelocity>(),
         TypeId::of::<BodyMass>(),
+        TypeId::of::<BodyAngularVelocity>(),
+        TypeId::of::<BodyInertia>(),
         TypeId::of::<Rest>(),
     ];
     for id in components {
@@ -186,6 +188,13 @@ fn values_survive_a_serialized_round_trip() {
         BodyVelocity(Vec3::X)
     );
     assert_eq!(round_trip(&registry, &BodyMass(3.0)), BodyMass(3.0));
+    assert_eq!(
+        round_trip(&registry, &BodyAngularVelocity(Vec3::Y)),
+        BodyAngularVelocity(Vec3::Y)
+    );
+    let inertia =
+        BodyInertia::from_properties(&generate::cuboid(Vec3::ONE, 1).mass_properties(Vec3::ONE));
+    assert_eq!(round_trip(&registry, &inertia), inertia);
 }
 
 #[test]

@@ -36,6 +36,20 @@ pub fn body_kinds() -> Vec<(&'static str, MeshCollider)> {
         .collect()
 }
 
+/// The inside of the pile's box: `|x|, |z| < half`, above the floor at `y = 0`.
+#[derive(Resource, Clone, Copy)]
+pub struct PileBox {
+    pub half: f32,
+}
+
+impl PileBox {
+    /// Whether a body's origin is outside the box (below the floor or beyond a wall, by
+    /// more than `margin`).
+    pub fn outside(&self, p: Vec3, margin: f32) -> bool {
+        p.y < -margin || p.x.abs() > self.half + margin || p.z.abs() > self.half + margin
+    }
+}
+
 /// The meshes the bodies share, by name (the picture colours the bodies by kind).
 #[derive(Resource, Clone)]
 pub struct BodyKinds(pub Vec<(&'static str, MeshCollider)>);
@@ -58,6 +72,7 @@ pub fn setup(app: &mut App, options: &Options) {
     let layer_gap = 1.2;
     let half = per_row as f32 * spacing * 0.5 + 0.3;
     let world = app.world_mut();
+    world.insert_resource(PileBox { half });
     // Subdivided, so that its tree has small leaves (a few huge triangles make every exact
     // test against it slow).
     let slab = |h: Vec3| MeshCollider::new(generate::cuboid(h, 12));
@@ -207,7 +222,8 @@ pub struct Report {
     /// Slowest collision stage run, ms.
     pub worst_ms: f64,
     pub inside: usize,
-    pub below: usize,
+    /// Bodies outside the box: below its floor or beyond a wall.
+    pub escaped: usize,
     pub moving: usize,
     pub asleep: usize,
     pub started: u64,
@@ -245,12 +261,11 @@ pub fn run(args: &Args) -> (App, Report) {
         .filter(|r| r.is_asleep())
         .count();
     let mut q = world.query_filtered::<&ColliderPose, With<BodyVelocity>>();
-    let (inside, below) = q.iter(world).fold((0, 0), |(i, b), p| {
-        let y = p.0.translation.y;
-        (
-            i + usize::from((-0.1..3.5).contains(&y)),
-            b + usize::from(y < -0.5),
-        )
+    let walls = *world.resource::<PileBox>();
+    let (inside, escaped) = q.iter(world).fold((0, 0), |(i, e), p| {
+        let t = p.0.translation;
+        let out = walls.outside(t, 0.1);
+        (i + usize::from(!out && t.y < 3.5), e + usize::from(out))
     });
     let c = world.resource::<CollisionDiagnostics>().counters;
     let picture = picture::side_view(world, &args.svg);
@@ -261,7 +276,7 @@ pub fn run(args: &Args) -> (App, Report) {
         elapsed,
         worst_ms: worst,
         inside,
-        below,
+        escaped,
         moving,
         asleep,
         started: c.started,
@@ -288,8 +303,8 @@ impl fmt::Display for Report {
         )?;
         writeln!(
             f,
-            "  {} bodies in the box, {} below the floor, {} still moving faster than 0.5 m/s, {} asleep",
-            self.inside, self.below, self.moving, self.asleep
+            "  {} bodies in the box, {} escaped it (below the floor or beyond a wall), {} still moving faster than 0.5 m/s, {} asleep",
+            self.inside, self.escaped, self.moving, self.asleep
         )?;
         writeln!(
             f,

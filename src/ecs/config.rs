@@ -95,9 +95,16 @@ pub struct CollisionConfig {
     /// [`CollisionPairs`](super::CollisionPairs), and responses take them from the
     /// [`ContactQueue`](super::ContactQueue)).
     pub contact_messages: bool,
-    /// Contacts reported per pair with a deformable mesh at most (rigid pairs report the
-    /// first contact found).
+    /// Contacts reported per pair with a deformable mesh at most (rigid pairs report one
+    /// contact, see [`CollisionConfig::contact_regions`]).
     pub max_contacts_per_pair: usize,
+    /// The one contact of a rigid pair tested exactly summarises its whole contact region:
+    /// the mean of the meeting points of every intersecting triangle pair, their mean normal,
+    /// the largest depth. Without, it is the first intersecting triangle pair found (a test
+    /// that stops early, but whose point can lie anywhere in the region: a response that
+    /// turns bodies would spin them about it). Off by default;
+    /// [`ImpulseResponsePlugin`](super::ImpulseResponsePlugin) turns it on.
+    pub contact_regions: bool,
     /// Contacts reported per self-colliding mesh at most.
     pub max_self_contacts: usize,
     /// Contacts the Response stage may consume per run (`None`: all of them). What is left
@@ -123,6 +130,7 @@ impl Default for CollisionConfig {
             proxy_margin: 0.1,
             contact_messages: false,
             max_contacts_per_pair: 64,
+            contact_regions: false,
             max_self_contacts: 256,
             response_budget: None,
         }

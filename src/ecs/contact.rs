@@ -35,8 +35,74 @@ fn centroid(t: &[Vec3; 3]) -> Vec3 {
     (t[0] + t[1] + t[2]) / 3.0
 }
 
-/// The contact of an intersecting triangle pair: point between the centroids, normal of the
-/// larger triangle (the reference face, as in box-box manifolds: a face meeting an edge or a
+/// Where two triangles' planes cut each triangle: the part of line `origin + t·direction`
+/// inside `t`, as its two ends (`(t, point)`), or `None` when no edge crosses the plane.
+fn plane_cut(
+    t: &[Vec3; 3],
+    plane_point: Vec3,
+    plane_normal: Vec3,
+    direction: Vec3,
+) -> Option<[(f32, Vec3); 2]> {
+    let d = t.map(|v| (v - plane_point).dot(plane_normal));
+    let mut ends: Option<[(f32, Vec3); 2]> = None;
+    for (i, j) in [(0, 1), (1, 2), (2, 0)] {
+        let crossing = if d[i] == 0.0 {
+            Some(t[i])
+        } else if (d[i] < 0.0) != (d[j] < 0.0) && d[j] != 0.0 {
+            Some(t[i] + (t[j] - t[i]) * (d[i] / (d[i] - d[j])))
+        } else {
+            None
+        };
+        if let Some(p) = crossing {
+            let at = (p.dot(direction), p);
+            ends = Some(match ends {
+                None => [at, at],
+                Some([lo, hi]) => [
+                    if at.0 < lo.0 { at } else { lo },
+                    if at.0 > hi.0 { at } else { hi },
+                ],
+            });
+        }
+    }
+    ends
+}
+
+/// A point where two intersecting triangles meet: the middle of their intersection segment
+/// (the overlap of each triangle's cut by the other's plane), or, for coplanar or nearly
+/// coplanar triangles, the smaller triangle's centroid on the larger one's plane.
+fn meeting_point(ta: &[Vec3; 3], tb: &[Vec3; 3]) -> Vec3 {
+    let na = (ta[1] - ta[0]).cross(ta[2] - ta[0]);
+    let nb = (tb[1] - tb[0]).cross(tb[2] - tb[0]);
+    let direction = na.cross(nb);
+    let cuts = (direction.length_squared() > 1e-6 * na.length_squared() * nb.length_squared())
+        .then(|| {
+            Some((
+                plane_cut(ta, tb[0], nb, direction)?,
+                plane_cut(tb, ta[0], na, direction)?,
+            ))
+        })
+        .flatten();
+    if let Some(([a_lo, a_hi], [b_lo, b_hi])) = cuts {
+        let lo = if a_lo.0 >= b_lo.0 { a_lo } else { b_lo };
+        let hi = if a_hi.0 <= b_hi.0 { a_hi } else { b_hi };
+        if lo.0 <= hi.0 {
+            return (lo.1 + hi.1) * 0.5;
+        }
+        // Rounding made the two cuts miss each other: between them.
+        return (a_lo.1 + a_hi.1 + b_lo.1 + b_hi.1) * 0.25;
+    }
+    let (small, large, n) = if na.length_squared() <= nb.length_squared() {
+        (ta, tb, nb)
+    } else {
+        (tb, ta, na)
+    };
+    let c = centroid(small);
+    let n = n.normalize_or_zero();
+    c - n * (c - large[0]).dot(n)
+}
+
+/// The contact of an intersecting triangle pair: point in the middle of the segment where
+/// they cross (see `meeting_point`), normal of the larger triangle (the reference face, as in box-box manifolds: a face meeting an edge or a
 /// corner; outward normals of closed meshes push the second along the first's normal and
 /// against its own), depth of the deeper triangle behind the other's plane (the
 /// smaller of the two, so a huge triangle's far corners do not count).
@@ -61,11 +127,48 @@ pub(crate) fn triangle_pair_contact(
         |t: &[Vec3; 3], c: Vec3, n: Vec3| t.iter().map(|v| (c - *v).dot(n)).fold(0.0f32, f32::max);
     let depth = behind(&tb, ca, na).min(behind(&ta, cb, nb));
     ContactPoint {
-        point: (ca + cb) * 0.5,
+        point: meeting_point(&ta, &tb),
         normal,
         depth,
         triangles: Some(pair),
     }
+}
+
+/// One contact summarising the contact region of the intersecting triangle `pairs` (at least
+/// one): the mean of their meeting points, the mean of their normals (the deepest pair's
+/// normal when they cancel), the largest depth, the deepest pair as its triangle pair. At most
+/// `max` pairs, evenly spread, are looked at.
+pub(crate) fn region_contact(
+    a: &CollisionMesh,
+    pose_a: &Pose,
+    b: &CollisionMesh,
+    pose_b: &Pose,
+    pairs: &[TrianglePair],
+    max: usize,
+) -> Option<ContactPoint> {
+    let step = pairs.len().div_ceil(max.max(1)).max(1);
+    let mut deepest: Option<ContactPoint> = None;
+    let (mut point, mut normal, mut count) = (Vec3::ZERO, Vec3::ZERO, 0u32);
+    for &pair in pairs.iter().step_by(step) {
+        let c = triangle_pair_contact(a, pose_a, b, pose_b, pair);
+        point += c.point;
+        normal += c.normal;
+        count += 1;
+        if deepest.is_none_or(|d| c.depth > d.depth) {
+            deepest = Some(c);
+        }
+    }
+    let deepest = deepest?;
+    let mean = normal / count as f32;
+    Some(ContactPoint {
+        point: point / count as f32,
+        normal: if mean.length_squared() > 0.01 {
+            mean.normalize()
+        } else {
+            deepest.normal
+        },
+        ..deepest
+    })
 }
 
 /// The contact of an interpenetration certificate: the sample found inside the other mesh, the
@@ -136,5 +239,38 @@ pub(crate) fn bounds_contact(a: &ColliderEntry, b: &ColliderEntry) -> ContactPoi
         normal,
         depth: overlap[axis],
         triangles: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_meeting_point_lies_on_both_triangles_not_between_their_centroids() {
+        // A large floor triangle and a small one crossing it far from the floor's centroid.
+        let floor = [
+            Vec3::ZERO,
+            Vec3::new(20.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 20.0),
+        ];
+        let small = [
+            Vec3::new(0.5, -1.0, -0.25),
+            Vec3::new(0.5, -1.0, 1.75),
+            Vec3::new(0.5, 1.0, 0.75),
+        ];
+        // `small` meets the floor plane along x = 0.5, z in [0.25, 1.25] (its cut), inside
+        // the floor triangle's cut z in [0, 19.5]: the middle is (0.5, 0, 0.75).
+        let p = meeting_point(&floor, &small);
+        assert!((p - Vec3::new(0.5, 0.0, 0.75)).length() < 1e-5, "{p}");
+        assert_eq!(meeting_point(&small, &floor), p);
+        // Coplanar: the small triangle's centroid, on the floor.
+        let flat = [
+            Vec3::new(1.0, 0.0, 1.0),
+            Vec3::new(2.0, 0.0, 1.0),
+            Vec3::new(1.0, 0.0, 2.0),
+        ];
+        let c = meeting_point(&floor, &flat);
+        assert!((c - centroid(&flat)).length() < 1e-6);
     }
 }

@@ -113,9 +113,9 @@ pub use reflect::{
     register_response_types, register_types,
 };
 pub use response::{
-    BodyMass, BodyVelocity, DEFAULT_STEP, ImpulseResponsePlugin, ImpulseSettings,
-    PenaltyResponsePlugin, PenaltySettings, Rest, impulse_response, integrate_velocities,
-    penalty_response, sleep_bodies,
+    BodyAngularVelocity, BodyInertia, BodyMass, BodyVelocity, DEFAULT_STEP, ImpulseResponsePlugin,
+    ImpulseSettings, InertiaSource, PenaltyResponsePlugin, PenaltySettings, Rest, impulse_response,
+    integrate_velocities, penalty_response, sleep_bodies, update_body_inertia,
 };
 pub use schedule::{CollisionSchedule, CollisionSystems};
 pub use tracking_systems::{FeaturePairs, TrackingState};

@@ -116,6 +116,9 @@ pub fn register_types(app: &mut App) {
 pub fn register_response_types(app: &mut App) {
     use super::*;
     app.register_type::<BodyVelocity>()
+        .register_type::<BodyAngularVelocity>()
+        .register_type::<BodyInertia>()
+        .register_type::<InertiaSource>()
         .register_type::<BodyMass>()
         .register_type::<Rest>()
         .register_type::<ImpulseSettings>()

@@ -1,4 +1,5 @@
-//! Triangle meshes: validated storage ([`TriMesh`]), adjacency ([`Topology`]), OBJ loading and
+//! Triangle meshes: validated storage ([`TriMesh`]), adjacency ([`Topology`]), mass properties
+//! ([`MassProperties`]), OBJ loading and
 //! generators for tests and examples ([`generate`]).
 //!
 //! Degenerate (zero-area) triangles, duplicate and unreferenced vertices, open boundaries and
@@ -12,10 +13,12 @@
 mod combine;
 mod error;
 pub mod generate;
+mod mass;
 mod obj;
 mod topology;
 mod tri_mesh;
 
 pub use error::MeshError;
+pub use mass::{MassModel, MassProperties};
 pub use topology::{Edge, Topology};
 pub use tri_mesh::TriMesh;

@@ -28,6 +28,8 @@ type OursCore = (
 );
 
 type OursPlugin = (
+    BodyAngularVelocity,
+    BodyInertia,
     BodyMass,
     BodyVelocity,
     ColliderPose,

@@ -8,7 +8,7 @@ use smallvec::SmallVec;
 use super::super::budget::SliceShare;
 use super::super::config::CollisionConfig;
 use super::super::contact::{
-    bounds_contact, interpenetration_contact, node_contact, triangle_pair_contact,
+    bounds_contact, interpenetration_contact, node_contact, region_contact, triangle_pair_contact,
 };
 use super::super::pairs::{PairTable, Record};
 use super::super::prepare::{ColliderEntry, ColliderTable};
@@ -17,6 +17,9 @@ use super::outcome::{Method, PairOutcome};
 use super::plan::Job;
 use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
 use crate::bvh::{QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with};
+
+/// Intersecting triangle pairs a contact region is summarised from at most (evenly spread).
+const REGION_PAIRS: usize = 64;
 
 #[derive(Default)]
 struct Workspaces {
@@ -248,6 +251,16 @@ impl Context<'_> {
             Method::Bounds => {
                 let contacts = smallvec::smallvec![bounds_contact(ea, eb)];
                 PairOutcome::exact(ends, Method::Bounds, 0, job.priority, contacts, self.run)
+            }
+            Method::Exact if ea.is_rigid() && eb.is_rigid() && self.config.contact_regions => {
+                // Every intersecting pair, summarised in one contact at the region's centre.
+                s.pairs.clear();
+                intersecting_pairs(ma, &ea.pose, mb, &eb.pose, s.exact, s.pairs);
+                let contacts = region_contact(ma, &ea.pose, mb, &eb.pose, s.pairs, REGION_PAIRS)
+                    .into_iter()
+                    .collect();
+                let nodes = s.exact.node_pairs_visited();
+                PairOutcome::exact(ends, Method::Exact, nodes, job.priority, contacts, self.run)
             }
             Method::Exact if ea.is_rigid() && eb.is_rigid() => {
                 // First hit only (stops early): one contact, as for ADB pairs.

@@ -20,7 +20,7 @@ use scaled::ScaledTrees;
 #[cfg(feature = "transform")]
 pub use transforms::sync_transforms;
 #[cfg(feature = "transform")]
-pub(crate) use transforms::{Parents, Placement, shift};
+pub(crate) use transforms::{Parents, Placement, place, shift};
 
 /// Without bevy_transform, bodies move through their pose alone.
 #[cfg(not(feature = "transform"))]
@@ -32,6 +32,12 @@ pub(crate) type Parents<'w, 's> = ();
 #[cfg(not(feature = "transform"))]
 pub(crate) fn shift(pose: &mut ColliderPose, _: &mut (), _: &Parents, delta: Vec3) {
     pose.0.translation += delta;
+}
+
+/// Puts a body at `world` (world space).
+#[cfg(not(feature = "transform"))]
+pub(crate) fn place(pose: &mut ColliderPose, _: &mut (), _: &Parents, world: Pose) {
+    pose.0 = world;
 }
 use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;

@@ -117,6 +117,31 @@ pub(crate) fn shift(
     }
 }
 
+/// Puts a body at `world` (a pose, world space): its pose, and its `Transform` when it has one
+/// (in its parent's frame for a child, whose parent is taken to be without shear), keeping
+/// the `Transform`'s scale.
+pub(crate) fn place(
+    pose: &mut ColliderPose,
+    (transform, parent): &mut (Option<Mut<Transform>>, Option<&ChildOf>),
+    parents: &Parents,
+    world: Pose,
+) {
+    pose.0 = world;
+    if let Some(t) = transform {
+        match parent.and_then(|p| parents.get(p.parent()).ok()) {
+            Some(g) => {
+                let (_, parent_rotation, _) = g.to_scale_rotation_translation();
+                t.translation = g.affine().inverse().transform_point3(world.translation);
+                t.rotation = (parent_rotation.inverse() * world.rotation).normalize();
+            }
+            None => {
+                t.translation = world.translation;
+                t.rotation = world.rotation;
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
