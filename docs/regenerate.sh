@@ -2,7 +2,7 @@
 # Reruns every stored run the README and docs/ quote, writing each output where the docs read it.
 # Needs ../shared/assets/meshes beside the project. Long (about an hour on 2 cores, most of it the
 # plugin's runs and the large tracking meshes); run it on a quiet machine, since timings are
-# stored. Usage: docs/regenerate.sh [adb|performance|ccd|tracking|plugin]... (default: all)
+# stored. Usage: docs/regenerate.sh [adb|performance|ccd|ccd_plugin|tracking|plugin]... (default: all)
 #
 # Each docs/<topic>.md names the command of each figure; this script is those commands in one place.
 set -euo pipefail
@@ -37,6 +37,20 @@ performance() { # docs/performance.md: the exact query against parry3d
 ccd() { # docs/ccd.md: continuous collision against the discrete query and parry3d
   { echo "\$ cargo bench --bench ccd"; cargo bench --quiet --bench ccd 2>/dev/null; } |
     tee docs/ccd/bench.txt
+  ccd_plugin
+}
+
+ccd_plugin() { # docs/ccd.md: continuous collision in the plugin (tunnel, cannonball at 10x)
+  {
+    for args in "--speed 10 --svg docs/ccd/tunnel.svg" "--speed 10 --seed 2" "--speed 10 --seed 3" \
+      "--speed 3" "--speed 30"; do
+      echo "\$ cargo run --release --example tunnel -- $args"
+      # shellcheck disable=SC2086
+      cargo run --release --quiet --example tunnel -- $args
+    done
+    echo "\$ cargo run --release --example cannonball -- 300 0.5 1000 0.2 off 10"
+    cargo run --release --quiet --example cannonball -- 300 0.5 1000 0.2 off 10
+  } | tee docs/ccd/plugin.txt
 }
 
 tracking() { # docs/tracking.md: tracking against the exact self-collision pass

@@ -140,10 +140,10 @@ pub mod prelude {
         BodyAngularVelocity, BodyInertia, BodyMass, BodyVelocity, ColliderPose, ColliderScale,
         CollisionConfig, CollisionDiagnostics, CollisionEnded, CollisionError, CollisionPairs,
         CollisionSensor, CollisionStarted, CollisionSystems, Contact, ContactLayer, ContactLayers,
-        ContactQueue, Deformable, Fidelity, FrameBudget, ImpulseResponsePlugin, MeshCollider,
-        Method, ObserveCollisions, PairFilter, PairFilterPlugin, PenaltyResponsePlugin,
-        RefilterPairs, SelfCollision, StochasticCollisionPlugin, StochasticCollisionPlugins,
-        TouchingEntities,
+        ContactQueue, ContinuousCollision, Deformable, Fidelity, FrameBudget,
+        ImpulseResponsePlugin, MeshCollider, Method, ObserveCollisions, PairFilter,
+        PairFilterPlugin, PenaltyResponsePlugin, RefilterPairs, SelfCollision,
+        StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
     };
     #[cfg(feature = "debug_render")]
     pub use crate::ecs::{CollisionDebugPlugin, CollisionGizmos};

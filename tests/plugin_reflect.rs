@@ -57,6 +57,7 @@ fn every_public_type_is_registered_with_its_ecs_data() {
         TypeId::of::<Deformable>(),
         TypeId::of::<Fidelity>(),
         TypeId::of::<SelfCollision>(),
+        TypeId::of::<ContinuousCollision>(),
         TypeId::of::<ContactLayers>(),
         TypeId::of::<TouchingEntities>(),
         TypeId::of::<ColliderPose>(),
@@ -143,6 +144,7 @@ fn values_survive_a_serialized_round_trip() {
         other: Entity::from_raw_u32(8).unwrap(),
         method: Method::Adb,
         probability: 0.93,
+        time_of_impact: Some(0.25),
     };
     assert_eq!(round_trip(&registry, &started), started);
     let contact = Contact {
@@ -156,10 +158,12 @@ fn values_survive_a_serialized_round_trip() {
         triangles: Some(TrianglePair { a: 4, b: 9 }),
         priority: 2.5,
         frame: 40,
+        time_of_impact: None,
     };
     assert_eq!(round_trip(&registry, &contact), contact);
     let untriangled = Contact {
         triangles: None,
+        time_of_impact: Some(0.5),
         ..contact
     };
     assert_eq!(round_trip(&registry, &untriangled), untriangled);

@@ -68,25 +68,35 @@ pub fn setup(app: &mut App, options: &Options, fidelity: Option<Fidelity>) {
     }
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(options.seed);
     for _ in 0..options.count(DEFAULT_SHOTS) {
-        let start = Vec3::new(
-            -20.0,
-            rng.random_range(0.5..2.0),
-            rng.random_range(-7.5..7.5),
-        );
-        let v = Vec3::new(
-            rng.random_range(14.0..22.0),
-            rng.random_range(3.0..10.0),
-            rng.random_range(-1.0..1.0),
-        );
-        world.spawn((
+        let (start, v) = random_shot(&mut rng);
+        let mut shot = world.spawn((
             ball.clone(),
             ColliderPose::from_translation(start),
-            BodyVelocity(v),
+            BodyVelocity(v * options.speed),
             Shot::default(),
             fidelity,
             balls,
         ));
+        if options.continuous {
+            shot.insert(ContinuousCollision::WhenFast);
+        }
     }
+}
+
+/// A shot's start and velocity: 20 units before the wall, 0.5-2 up, anywhere along it;
+/// 14-22 units per second towards it, 3-10 upwards, up to 1 sideways.
+pub fn random_shot(rng: &mut Xoshiro256PlusPlus) -> (Vec3, Vec3) {
+    let start = Vec3::new(
+        -20.0,
+        rng.random_range(0.5..2.0),
+        rng.random_range(-7.5..7.5),
+    );
+    let v = Vec3::new(
+        rng.random_range(14.0..22.0),
+        rng.random_range(3.0..10.0),
+        rng.random_range(-1.0..1.0),
+    );
+    (start, v)
 }
 
 /// Moves the flying balls (no integration plugin: the shots are the scene's own bodies).

@@ -1,4 +1,4 @@
-//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`) and
+//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`, `tunnel`) and
 //! `profile`: each scene builds a headless `App` with the plugin in `PostUpdate`.
 #![allow(dead_code)]
 
@@ -6,6 +6,7 @@ pub mod cannonball;
 pub mod cloth;
 pub mod intestine;
 pub mod pile;
+pub mod tunnel;
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -37,6 +38,10 @@ pub struct Options {
     pub adb_interior: Option<bool>,
     /// Write a `Contact` message per contact (`CollisionConfig::contact_messages`).
     pub contact_messages: bool,
+    /// The cannonball scene's shot speed, a multiple of its default (1).
+    pub speed: f32,
+    /// The cannonball scene's shots get `ContinuousCollision::WhenFast`.
+    pub continuous: bool,
 }
 
 impl Default for Options {
@@ -52,6 +57,8 @@ impl Default for Options {
             adb_order: None,
             adb_interior: None,
             contact_messages: false,
+            speed: 1.0,
+            continuous: false,
         }
     }
 }

@@ -219,6 +219,31 @@ impl Fidelity {
 #[reflect(Component, Clone, Debug, Default)]
 pub struct SelfCollision;
 
+/// Continuous collision for a rigid collider: in a run where it moved, its pairs are tested
+/// over the whole motion since the last run (from its last pose to this one, translation and
+/// rotation), so that it cannot pass through a thin mesh between two runs unseen. Its
+/// broad-phase box covers the motion; a pair whose discrete test finds no contact, or that did
+/// not touch before, gets the exact continuous query
+/// ([`ccd::time_of_impact`](crate::ccd::time_of_impact)), whatever its fidelity, and a
+/// contact it finds carries its time of impact
+/// ([`ContactPoint::time_of_impact`](super::ContactPoint::time_of_impact)). A move is swept
+/// as a straight motion whatever caused it: remove the component for a teleport. A swept
+/// pair that a time budget leaves untested in a run (past the deadline) is not swept in it.
+/// Deformable meshes are not swept by the plugin yet (the core has
+/// [`ccd::deforming_time_of_impact`](crate::ccd::deforming_time_of_impact)).
+#[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[reflect(Component, Clone, Debug, Default, PartialEq)]
+pub enum ContinuousCollision {
+    /// Swept whenever it moves.
+    Always,
+    /// Swept in runs where it moves farther than
+    /// [`CollisionConfig::continuous_motion`](super::CollisionConfig::continuous_motion) of its
+    /// world box's smallest extent (fast enough to pass through something thin); otherwise
+    /// tested at its pose, as other colliders.
+    #[default]
+    WhenFast,
+}
+
 /// The entities this entity currently collides with (sorted), kept up to date by the Report
 /// stage. Inserted automatically with [`MeshCollider`] and [`Deformable`]; a mesh's own
 /// self-collision is not listed.

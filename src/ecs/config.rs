@@ -107,6 +107,11 @@ pub struct CollisionConfig {
     pub contact_regions: bool,
     /// Contacts reported per self-colliding mesh at most.
     pub max_self_contacts: usize,
+    /// How far (a fraction of its world box's smallest extent) a collider with
+    /// [`ContinuousCollision::WhenFast`](super::ContinuousCollision::WhenFast) must move in a
+    /// run to be swept. Default ¼: a ball moving a quarter of its diameter per run cannot
+    /// pass through anything at least half its diameter thick between runs.
+    pub continuous_motion: f32,
     /// Contacts the Response stage may consume per run (`None`: all of them). What is left
     /// stays in the [`ContactQueue`](super::ContactQueue) for the next run, highest priority first.
     pub response_budget: Option<usize>,
@@ -132,6 +137,7 @@ impl Default for CollisionConfig {
             max_contacts_per_pair: 64,
             contact_regions: false,
             max_self_contacts: 256,
+            continuous_motion: 0.25,
             response_budget: None,
         }
     }

@@ -19,6 +19,11 @@ pub struct ContactPoint {
     /// The triangle pair (first entity, second entity), when the contact comes from one.
     #[reflect(remote = super::reflect::OptionTrianglePairReflect)]
     pub triangles: Option<TrianglePair>,
+    /// For a pair tested over a swept collider's motion
+    /// ([`ContinuousCollision`](super::ContinuousCollision)): when in the run's step the
+    /// surfaces first met, as a fraction of the motion in `[0, 1]` (0: they touched already
+    /// where the motion started). `None` for contacts found at the run's poses only.
+    pub time_of_impact: Option<f32>,
 }
 
 fn world_triangle(mesh: &CollisionMesh, pose: &Pose, t: u32) -> [Vec3; 3] {
@@ -131,6 +136,7 @@ pub(crate) fn triangle_pair_contact(
         normal,
         depth,
         triangles: Some(pair),
+        time_of_impact: None,
     }
 }
 
@@ -180,6 +186,7 @@ pub(crate) fn interpenetration_contact(w: &ContactWitness, c: &Interpenetration)
         normal: w.normal,
         depth: c.depth,
         triangles: None,
+        time_of_impact: None,
     }
 }
 
@@ -218,6 +225,7 @@ pub(crate) fn node_contact(
         normal,
         depth,
         triangles: None,
+        time_of_impact: None,
     }
 }
 
@@ -239,6 +247,7 @@ pub(crate) fn bounds_contact(a: &ColliderEntry, b: &ColliderEntry) -> ContactPoi
         normal,
         depth: overlap[axis],
         triangles: None,
+        time_of_impact: None,
     }
 }
 

@@ -95,6 +95,12 @@ pub struct CollisionCounters {
     pub cached_pairs: u64,
     /// Pairs tested exactly.
     pub exact_pairs: u64,
+    /// Pairs tested over a swept collider's motion
+    /// ([`ContinuousCollision`](super::ContinuousCollision)).
+    pub swept_pairs: u64,
+    /// Swept pairs the discrete test found apart that met during the motion: contacts the
+    /// discrete test alone would have missed (tunnelling caught).
+    pub caught_by_sweep: u64,
     /// `CollisionStarted` messages written.
     pub started: u64,
     /// `CollisionEnded` messages written.

@@ -71,6 +71,11 @@ pub struct CollisionStarted {
     pub method: Method,
     /// Its confidence that the pair collides.
     pub probability: f64,
+    /// For a pair with a swept collider ([`ContinuousCollision`](super::ContinuousCollision)):
+    /// when in the run's step the surfaces first met, a fraction in `[0, 1]` (a contact the
+    /// discrete test alone would have missed when the surfaces are apart again at the run's
+    /// poses). `None` otherwise.
+    pub time_of_impact: Option<f32>,
 }
 
 impl CollisionStarted {
@@ -122,6 +127,9 @@ pub struct Contact {
     pub triangles: Option<TrianglePair>,
     /// Priority for responses (higher first): the pair's priority, deeper contacts higher.
     pub priority: f32,
+    /// When in the run's step the surfaces met, for a pair tested over a swept collider's
+    /// motion ([`ContactPoint::time_of_impact`](super::ContactPoint::time_of_impact)).
+    pub time_of_impact: Option<f32>,
     /// Run at whose poses the contact was found (see [`CollisionDiagnostics::frame`]):
     /// earlier than the current run for a pair whose last answer was kept (not tested in
     /// this run), whose contact then has depth 0.
@@ -314,7 +322,8 @@ pub fn report_collisions(
             .iter()
             .filter(|t| t.started == pass_started)
         {
-            let (a, b, method, probability) = (t.a, t.b, t.method, t.probability);
+            let (a, b, method, probability, time_of_impact) =
+                (t.a, t.b, t.method, t.probability, t.time_of_impact);
             set_colliding(&mut colliding, a, b, t.started);
             if t.started {
                 started += 1;
@@ -323,6 +332,7 @@ pub fn report_collisions(
                     other,
                     method,
                     probability,
+                    time_of_impact,
                 };
                 writers.started.write(event(a, b));
                 notify(&mut commands, &observed, a, b, event);
@@ -368,6 +378,7 @@ pub fn report_collisions(
                 triangles: c.triangles,
                 priority: o.priority * (1.0 + depth.max(0.0)),
                 frame: o.computed_run,
+                time_of_impact: c.time_of_impact,
             });
         }
     }

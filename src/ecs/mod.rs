@@ -83,8 +83,8 @@ pub use bevy_mesh::{
 pub use broad_phase::BroadPhaseState;
 pub use budget::{pair_priority, pair_seed, slices};
 pub use components::{
-    ColliderPose, ColliderScale, CollisionSensor, Deformable, Fidelity, MeshCollider,
-    ObserveCollisions, SelfCollision, TouchingEntities,
+    ColliderPose, ColliderScale, CollisionSensor, ContinuousCollision, Deformable, Fidelity,
+    MeshCollider, ObserveCollisions, SelfCollision, TouchingEntities,
 };
 pub use config::{CollisionConfig, FrameBudget};
 pub use contact::ContactPoint;

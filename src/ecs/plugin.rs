@@ -143,6 +143,9 @@ impl Plugin for StochasticCollisionPlugin {
                         .chain()
                         .in_set(Tracking),
                     report_collisions.in_set(Report),
+                    super::prepare::note_end_poses
+                        .after(Response)
+                        .run_if(any_with_component::<super::ContinuousCollision>),
                 ),
             );
         #[cfg(feature = "transform")]

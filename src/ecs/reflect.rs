@@ -90,6 +90,7 @@ pub fn register_types(app: &mut App) {
         .register_type::<Deformable>()
         .register_type::<Fidelity>()
         .register_type::<SelfCollision>()
+        .register_type::<ContinuousCollision>()
         .register_type::<ContactLayers>()
         .register_type::<TouchingEntities>()
         .register_type::<ColliderPose>()

@@ -186,6 +186,7 @@ fn world_contact(c: &Contact, pose_a: &Pose, self_mode: bool) -> ContactPoint {
             a: c.triangle_a,
             b: c.triangle_b,
         }),
+        time_of_impact: None,
     }
 }
 

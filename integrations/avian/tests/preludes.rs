@@ -34,6 +34,7 @@ type OursPlugin = (
     BodyVelocity,
     ColliderPose,
     ColliderScale,
+    ContinuousCollision,
     CollisionConfig,
     CollisionDiagnostics,
     CollisionEnded,

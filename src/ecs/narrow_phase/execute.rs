@@ -12,11 +12,13 @@ use super::super::contact::{
 };
 use super::super::pairs::{PairTable, Record};
 use super::super::prepare::{ColliderEntry, ColliderTable};
+use super::continuous::swept_contact;
 use super::memory::exact_from_memory;
 use super::outcome::{Method, PairOutcome};
 use super::plan::Job;
 use crate::adb::{AdbQuery, AdbWorkspace, Budget, adb_intersects};
 use crate::bvh::{QueryWorkspace, TrianglePair, intersecting_pairs, intersects_with};
+use crate::ccd::CcdWorkspace;
 
 /// Intersecting triangle pairs a contact region is summarised from at most (evenly spread).
 const REGION_PAIRS: usize = 64;
@@ -26,6 +28,7 @@ struct Workspaces {
     exact: QueryWorkspace,
     adb: AdbWorkspace,
     pairs: Vec<TrianglePair>,
+    ccd: CcdWorkspace,
 }
 
 thread_local! {
@@ -42,7 +45,25 @@ pub(crate) fn with_workspaces<R>(
     })
 }
 
+/// Runs `f` with this thread's reusable workspaces, the continuous query's among them.
+fn with_all_workspaces<R>(
+    f: impl FnOnce(
+        &mut QueryWorkspace,
+        &mut AdbWorkspace,
+        &mut Vec<TrianglePair>,
+        &mut CcdWorkspace,
+    ) -> R,
+) -> R {
+    WORKSPACES.with(|w| {
+        let w = &mut *w.borrow_mut();
+        f(&mut w.exact, &mut w.adb, &mut w.pairs, &mut w.ccd)
+    })
+}
+
 /// What a job's run made of it.
+// Answers are written into a slot per job and read back once: boxing the large variant would
+// allocate for every answered pair.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Clone)]
 pub(crate) enum Answer {
     /// An answer computed in this run, and the memory it leaves (`None`: the pair's memory
@@ -64,6 +85,10 @@ pub(crate) struct RunCounts {
     pub tested: u64,
     pub test_time: Duration,
     pub memory_time: Duration,
+    /// Pairs tested over a swept collider's motion, and how many of them the discrete test
+    /// had found apart but met during the motion.
+    pub swept: u64,
+    pub caught: u64,
 }
 
 impl RunCounts {
@@ -77,6 +102,8 @@ impl RunCounts {
             tested: self.tested + o.tested,
             test_time: self.test_time + o.test_time,
             memory_time: self.memory_time + o.memory_time,
+            swept: self.swept + o.swept,
+            caught: self.caught + o.caught,
         }
     }
 
@@ -127,7 +154,11 @@ struct Scratch<'w> {
     exact: &'w mut QueryWorkspace,
     adb: &'w mut AdbWorkspace,
     pairs: &'w mut Vec<TrianglePair>,
+    ccd: &'w mut CcdWorkspace,
     node_cap: u64,
+    /// Pairs swept, and caught by the sweep only, in this run of jobs.
+    swept: u64,
+    caught: u64,
 }
 
 /// What every run of jobs reads.
@@ -171,13 +202,16 @@ impl Context<'_> {
     pub fn run_chunk(&self, w: &mut ChunkWork) {
         let start = Instant::now();
         let mut counts = RunCounts::default();
-        with_workspaces(|exact, adb, pairs| {
+        with_all_workspaces(|exact, adb, pairs, ccd| {
             let s = &mut Scratch {
                 query: self.query(),
                 exact,
                 adb,
                 pairs,
+                ccd,
                 node_cap: u64::MAX,
+                swept: 0,
+                caught: 0,
             };
             let is_exact = |j: &Job| j.chosen && j.method == Method::Exact;
             let mut late = false;
@@ -208,6 +242,8 @@ impl Context<'_> {
                 counts.count(&answer, tested);
                 w.answers[i] = answer;
             }
+            counts.swept = s.swept;
+            counts.caught = s.caught;
         });
         counts.memory_time = start.elapsed().saturating_sub(counts.test_time);
         *w.counts = counts;
@@ -233,9 +269,50 @@ impl Context<'_> {
         if late && job.method != Method::Bounds {
             return (Answer::Kept, false);
         }
-        let o = self.test(job, (ea, eb), s);
+        let mut o = self.test(job, (ea, eb), s);
+        self.sweep(job, &mut o, (ea, eb), s);
         let r = Record::of_test(job, &o, (ea, eb), self.run);
         (Answer::Computed(o, Some(r)), true)
+    }
+
+    /// A pair with a collider swept in this run ([`ColliderEntry::is_swept`]), rigid, tested
+    /// exactly or with ADB: if its test found it apart, or it did not touch before, the exact
+    /// continuous query over both motions; a contact found during the motion makes it collide
+    /// (probability 1; the contact at the time of impact) or, when the test found a contact
+    /// already, gives that contact its time of impact.
+    fn sweep(
+        &self,
+        job: &Job,
+        o: &mut PairOutcome,
+        (ea, eb): (&ColliderEntry, &ColliderEntry),
+        s: &mut Scratch,
+    ) {
+        let swept = ea.is_swept(self.run) || eb.is_swept(self.run);
+        if !swept || !ea.is_rigid() || !eb.is_rigid() {
+            return;
+        }
+        if !matches!(o.method, Method::Exact | Method::Adb) {
+            return;
+        }
+        let was_touching = self.pairs.slot(job.pair).outcome.collides;
+        if o.collides && was_touching {
+            return;
+        }
+        s.swept += 1;
+        let Some(hit) = swept_contact(ea, eb, self.run, s.ccd) else {
+            return;
+        };
+        if o.collides {
+            if let Some(c) = o.contacts.first_mut() {
+                c.time_of_impact = hit.time_of_impact;
+            }
+        } else {
+            s.caught += 1;
+            o.collides = true;
+            o.probability = 1.0;
+            o.contacts.clear();
+            o.contacts.push(hit);
+        }
     }
 
     /// Tests a job by its method.

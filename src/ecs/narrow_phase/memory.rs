@@ -182,6 +182,7 @@ mod tests {
                 normal: Vec3::X,
                 depth: 0.1,
                 triangles: Some(TrianglePair { a: 4000, b: 5000 }),
+                time_of_impact: None,
             }),
             offset: Vec3::new(1.9, 0.0, 0.0),
             since: 3,

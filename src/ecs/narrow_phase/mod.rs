@@ -12,6 +12,7 @@
 //! best estimate. Jobs are planned, then tested, on the task pool, each thread with its own
 //! workspaces and each run of jobs writing its answers in place; they are recorded in the
 //! table in job order, so the outcome is the same for any number of threads.
+mod continuous;
 mod costs;
 mod execute;
 mod memory;
@@ -242,6 +243,8 @@ pub fn narrow_phase(
     c.exact_pairs += total.exact_pairs;
     c.budget_exhausted_pairs += total.budget_exhausted;
     c.coherence_pairs += total.coherence + kept;
+    c.swept_pairs += total.swept;
+    c.caught_by_sweep += total.caught;
     c.cached_pairs += cached;
     c.tested_pairs += total.tested;
     c.test_time += test_time;

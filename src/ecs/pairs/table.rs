@@ -75,6 +75,8 @@ pub(crate) struct Transition {
     /// (a removed pair: [`Method::Bounds`], 0).
     pub method: Method,
     pub probability: f64,
+    /// When in the step a swept pair's surfaces met (a start found by the continuous query).
+    pub time_of_impact: Option<f32>,
 }
 
 /// What a test (or an answer computed from memory) leaves for later runs.
@@ -283,6 +285,7 @@ impl PairTable {
                 started: false,
                 method: Method::Bounds,
                 probability: 0.0,
+                time_of_impact: None,
             });
         }
     }
@@ -393,6 +396,12 @@ impl PairTable {
                 started: collides,
                 method: s.outcome.method,
                 probability: s.outcome.probability,
+                time_of_impact: s
+                    .outcome
+                    .contacts
+                    .first()
+                    .and_then(|c| c.time_of_impact)
+                    .filter(|_| collides),
             });
         }
         if collides {

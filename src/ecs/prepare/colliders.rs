@@ -7,7 +7,7 @@ use bevy_ecs::prelude::*;
 use glam::{Vec3, Vec3A};
 use smallvec::SmallVec;
 
-use super::super::components::Fidelity;
+use super::super::components::{ContinuousCollision, Fidelity};
 use super::super::layers::ContactLayers;
 use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::adb::AdbTree;
@@ -73,6 +73,17 @@ pub struct ColliderEntry {
     /// Translation in the last run it moved in, if that was this run (an estimate of
     /// speed × time step); zero otherwise.
     pub motion: Vec3,
+    /// Its pose before its last move: where a swept collider's motion starts (its pose at the
+    /// end of the run before, after the responses).
+    pub previous_pose: Pose,
+    /// Its pose at the end of the last run (after the responses, for a collider with
+    /// [`ContinuousCollision`](super::super::ContinuousCollision)).
+    pub(crate) end_pose: Pose,
+    /// Its [`ContinuousCollision`](super::super::ContinuousCollision), if any.
+    pub continuous: Option<ContinuousCollision>,
+    /// The last run in which it was swept (its world box covers the motion from
+    /// `previous_pose` to `pose`, and its pairs are tested over that motion).
+    pub swept_run: u64,
     /// The run ([`CollisionDiagnostics::frame`](super::super::CollisionDiagnostics::frame))
     /// since which the entity's pose and geometry are unchanged: an answer computed in that
     /// run or later still holds for a rigid pair.
@@ -99,6 +110,12 @@ impl ColliderEntry {
         matches!(self.geometry, Geometry::Rigid(_))
     }
 
+    /// Whether its pairs are tested over its motion in `run`.
+    #[inline]
+    pub fn is_swept(&self, run: u64) -> bool {
+        self.swept_run == run && self.is_rigid()
+    }
+
     /// Its pairs' slots in the pair table.
     pub(crate) fn pair_slots(&self) -> &[u32] {
         &self.pairs
@@ -121,6 +138,10 @@ impl ColliderEntry {
             layers: Default::default(),
             self_collision: false,
             motion: Vec3::ZERO,
+            previous_pose: pose,
+            end_pose: pose,
+            continuous: None,
+            swept_run: 0,
             still_since: since,
             geometry_since: since,
             pairs: Default::default(),

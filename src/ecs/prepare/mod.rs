@@ -43,7 +43,8 @@ use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;
 
 use super::components::{
-    ColliderPose, ColliderScale, Deformable, Fidelity, MeshCollider, SelfCollision,
+    ColliderPose, ColliderScale, ContinuousCollision, Deformable, Fidelity, MeshCollider,
+    SelfCollision,
 };
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
@@ -51,7 +52,7 @@ use super::events::{CollisionError, CollisionErrorKind};
 use super::layers::ContactLayers;
 use super::pool::CollisionTaskPool;
 use crate::bvh::CollisionMesh;
-use crate::geometry::Pose;
+use crate::geometry::{Aabb, Pose};
 use crate::mesh::{MeshError, TriMesh};
 
 /// What Prepare remembers between runs: the entities reported invalid (reported once), the
@@ -167,6 +168,7 @@ type ColliderData<'a> = (
     Option<&'a Fidelity>,
     Option<&'a ContactLayers>,
     Has<SelfCollision>,
+    Option<&'a ContinuousCollision>,
 );
 
 /// One entity's [`ColliderData`].
@@ -182,6 +184,7 @@ type AnyChange = Or<(
     Changed<Fidelity>,
     Changed<ContactLayers>,
     Changed<SelfCollision>,
+    Changed<ContinuousCollision>,
 )>;
 
 /// The colliders whose components changed since the last run, or were removed.
@@ -265,7 +268,9 @@ struct Update<'a, 'w> {
 impl Update<'_, '_> {
     /// Updates the collider of one entity from its components.
     fn entry(&mut self, data: ColliderItem) {
-        let (entity, pose, scale, collider, deformable, fidelity, layers, self_marker) = data;
+        let (entity, pose, scale, collider, deformable, fidelity, layers, self_marker, continuous) =
+            data;
+        let continuous = continuous.copied();
         let scale = scale.copied().unwrap_or_default();
         let scale_problem = || CollisionErrorKind::InvalidScale {
             scale: scale.0.to_array(),
@@ -324,6 +329,10 @@ impl Update<'_, '_> {
                 layers,
                 self_collision,
                 motion: Vec3::ZERO,
+                previous_pose: pose,
+                end_pose: pose,
+                continuous,
+                swept_run: 0,
                 still_since: run,
                 geometry_since: run,
                 pairs: Default::default(),
@@ -340,7 +349,8 @@ impl Update<'_, '_> {
         // A deformable mesh updated here was refitted (or its marker changed): it moved.
         let moved = e.pose != pose || !same_geometry || !e.is_rigid();
         let filters = e.layers != layers || e.self_collision != self_collision;
-        if !(moved || filters || e.fidelity != fidelity || self.full) {
+        if !(moved || filters || e.fidelity != fidelity || e.continuous != continuous || self.full)
+        {
             // Written with the same values.
             return;
         }
@@ -355,11 +365,25 @@ impl Update<'_, '_> {
                 e.geometry_since = run;
                 e.geometry_id = geometry.id();
             }
+            e.previous_pose = if same_geometry { e.end_pose } else { pose };
             e.pose = pose;
+            e.end_pose = pose;
             e.geometry = geometry;
         }
+        e.continuous = continuous;
         if moved || self.full {
-            e.aabb = tight_world_aabb(e.geometry.mesh().bvh(), &e.pose).inflated(margin);
+            let end = tight_world_aabb(e.geometry.mesh().bvh(), &e.pose);
+            let swept = moved
+                .then(|| swept_box(e, &end, self.config.continuous_motion))
+                .flatten();
+            e.aabb = match swept {
+                Some(swept) => {
+                    e.swept_run = run;
+                    swept
+                }
+                None => end,
+            }
+            .inflated(margin);
         }
         if filters {
             e.filter_run = run;
@@ -369,6 +393,54 @@ impl Update<'_, '_> {
         e.self_collision = self_collision;
         self.table.mark_changed(i, run, moved);
     }
+}
+
+/// Colliders that may be swept whose pose changed.
+type SweptAndMoved = (With<ContinuousCollision>, Changed<ColliderPose>);
+
+/// After the responses: the poses in which swept-capable colliders end the run (a response
+/// may have moved them since Prepare), where their next motion starts.
+pub fn note_end_poses(
+    moved: Query<(Entity, &ColliderPose), SweptAndMoved>,
+    mut table: ResMut<ColliderTable>,
+) {
+    for (entity, pose) in &moved {
+        if let Some(i) = table.slot_of(entity) {
+            let e = table.entry_mut(i);
+            if e.pose != pose.0 {
+                e.end_pose = normalized(&pose.0);
+            }
+        }
+    }
+}
+
+/// The world box covering a collider's motion from its previous pose to its pose (`end`: its
+/// box there), if it is swept in this run: it has [`ContinuousCollision`], is rigid, moved,
+/// and (for [`ContinuousCollision::WhenFast`]) moved farther than `fraction` of `end`'s
+/// smallest extent. The union of the boxes at both ends, grown by how far a vertex's arc
+/// strays from its chord when the collider also turns.
+fn swept_box(e: &ColliderEntry, end: &Aabb, fraction: f32) -> Option<Aabb> {
+    let continuous = e.continuous?;
+    if !e.is_rigid() || e.previous_pose == e.pose {
+        return None;
+    }
+    let bvh = e.geometry.mesh().bvh();
+    let start = tight_world_aabb(bvh, &e.previous_pose);
+    let travel = (e.pose.translation - e.previous_pose.translation).length();
+    let angle = e.previous_pose.rotation.angle_between(e.pose.rotation);
+    let root = bvh.root_aabb();
+    let radius = root.min.abs().max(root.max.abs()).length();
+    // The farthest any point moves: its translation plus its turn (chord 2r·sin(θ/2)).
+    let reach = travel + 2.0 * radius * (0.5 * angle.min(std::f32::consts::PI)).sin();
+    let fast = match continuous {
+        ContinuousCollision::Always => true,
+        ContinuousCollision::WhenFast => reach > fraction * end.extents().min_element(),
+    };
+    if !fast {
+        return None;
+    }
+    let bulge = radius * (1.0 - (0.5 * angle.min(std::f32::consts::PI)).cos());
+    Some(start.union(end).inflated(bulge))
 }
 
 fn check_pose(pose: &Pose) -> Result<(), CollisionErrorKind> {

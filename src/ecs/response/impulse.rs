@@ -1,7 +1,10 @@
 //! The impulse response for simple rigid bodies: integration under gravity, impulses at the
 //! contact point (restitution, Coulomb friction, turning by the inertia from the mesh), linear
-//! position correction, sleep.
+//! position correction, a body moved back to its time of impact for a contact found by the
+//! continuous query, sleep.
 use std::collections::HashMap;
+
+use bevy_ecs::entity::EntityHashSet;
 use std::sync::{Arc, Weak};
 use std::time::Instant;
 
@@ -295,6 +298,7 @@ pub fn sleep_bodies(
 }
 
 /// Resolves rigid contacts (neither entity deformable) in priority order.
+#[allow(clippy::too_many_arguments)]
 pub fn impulse_response(
     settings: Res<ImpulseSettings>,
     time: Option<Res<Time>>,
@@ -303,16 +307,26 @@ pub fn impulse_response(
     deformables: Query<(), With<Deformable>>,
     parents: Parents,
     mut diag: ResMut<CollisionDiagnostics>,
+    mut rewound: Local<EntityHashSet>,
 ) {
     let start = Instant::now();
     // Contacts approaching slower than gravity accelerates in two steps are resting: no bounce.
-    let resting_speed = 2.0 * settings.gravity.length() * settings.step(time.as_deref());
+    let dt = settings.step(time.as_deref());
+    let resting_speed = 2.0 * settings.gravity.length() * dt;
     let run = diag.frame;
+    rewound.clear();
     let n = queue.consume(|c| {
         if c.a == c.b || deformables.contains(c.a) || deformables.contains(c.b) {
             return false;
         }
-        if let Ok([a, b]) = bodies.get_many_mut([c.a, c.b]) {
+        if let Ok([mut a, mut b]) = bodies.get_many_mut([c.a, c.b]) {
+            if let Some(t) = c.time_of_impact.filter(|_| c.frame == run) {
+                for (entity, body) in [(c.a, &mut a), (c.b, &mut b)] {
+                    if rewound.insert(entity) {
+                        rewind(body, t, dt, &parents);
+                    }
+                }
+            }
             resolve(&settings, (resting_speed, run), c, a, b, &parents);
         }
         true
@@ -404,6 +418,22 @@ fn wake_if_hit<'w>(s: &ImpulseSettings, approach: f32, a: &mut Body<'w>, b: &mut
             if r.asleep {
                 r.wake();
             }
+        }
+    }
+}
+
+/// Moves an awake body with a velocity back to where it was at `time_of_impact` of this
+/// run's step of `dt` (along its velocity; its turn is not undone): a contact found by the
+/// continuous query, which the body may have passed through since.
+fn rewind(body: &mut Body<'_>, time_of_impact: f32, dt: f32, parents: &Parents) {
+    let (pose, v, _, _, _, rest, placement) = body;
+    if rest.as_ref().is_some_and(|r| r.asleep) {
+        return;
+    }
+    if let Some(v) = v {
+        let back = -v.0 * dt * (1.0 - time_of_impact.clamp(0.0, 1.0));
+        if back != Vec3::ZERO {
+            shift(pose, placement, parents, back);
         }
     }
 }

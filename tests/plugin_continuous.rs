@@ -1,0 +1,147 @@
+//! Continuous collision in the plugin, in a real app (`TimePlugin`, `TransformPlugin`, the
+//! default `FixedPostUpdate` at 64 Hz, entities placed with `Transform`): a fast ball passes
+//! through a thin wall unseen by the discrete test; with `ContinuousCollision` the contact is
+//! reported, with the time of impact of a reference computed from the ball's path, and the
+//! impulse response sends the ball back from the wall. `WhenFast` sweeps only fast motion.
+#![cfg(feature = "transform")]
+mod plugin_support;
+
+use bevy_app::prelude::*;
+use bevy_ecs::prelude::*;
+use bevy_transform::components::Transform;
+use plugin_support::*;
+use stochastic_collision::ecs::{DEFAULT_STEP, ImpulseSettings};
+use stochastic_collision::prelude::*;
+
+const RADIUS: f32 = 0.15;
+/// A tenth of the ball's diameter.
+const WALL_HALF: f32 = 0.015;
+/// Per step (1/64 s): 3.125 units, ten wall-and-ball widths.
+const SPEED: f32 = 200.0;
+/// Where the ball is spawned: it moves once before the plugin first sees it (at x = -2), and
+/// crosses the wall in the next step (to x = 1.125).
+const START: f32 = -5.125;
+
+#[derive(Resource, Default)]
+struct Starts(Vec<CollisionStarted>);
+
+fn record(mut starts: ResMut<Starts>, mut reader: MessageReader<CollisionStarted>) {
+    starts.0.extend(reader.read().copied());
+}
+
+/// A thin wall in the x = 0 plane and a ball at `x0` flying along +x (moved by the scene
+/// itself, one step per fixed step, or by the impulse response with `response`).
+fn scene(
+    continuous: Option<ContinuousCollision>,
+    x0: f32,
+    speed: f32,
+    response: bool,
+) -> (App, Entity) {
+    let mut app = game();
+    app.init_resource::<Starts>().add_systems(Last, record);
+    if response {
+        app.add_plugins(
+            ImpulseResponsePlugin::default().with_settings(ImpulseSettings {
+                gravity: Vec3::ZERO,
+                damping: 0.0,
+                restitution: 1.0,
+                ..Default::default()
+            }),
+        );
+    } else {
+        app.add_systems(
+            FixedUpdate,
+            move |mut q: Query<&mut Transform, With<BodyVelocity>>| {
+                for mut t in &mut q {
+                    t.translation.x += speed * DEFAULT_STEP;
+                }
+            },
+        );
+    }
+    let wall = MeshCollider::new(generate::cuboid(Vec3::new(WALL_HALF, 2.0, 2.0), 4));
+    spawn(&mut app, (wall, Transform::default(), Fidelity::Exact));
+    let ball = app
+        .world_mut()
+        .spawn((
+            MeshCollider::new(generate::icosphere(RADIUS, 2)),
+            Transform::from_xyz(x0, 0.0, 0.0),
+            BodyVelocity(Vec3::X * speed),
+            Fidelity::Exact,
+        ))
+        .id();
+    if let Some(c) = continuous {
+        app.world_mut().entity_mut(ball).insert(c);
+    }
+    (app, ball)
+}
+
+fn steps(app: &mut App, n: usize) {
+    for _ in 0..n {
+        app.update();
+    }
+}
+
+#[test]
+fn a_fast_ball_tunnels_through_a_thin_wall_without_continuous_collision() {
+    let (mut app, ball) = scene(None, START, SPEED, false);
+    steps(&mut app, 6);
+    let x = app.world().get::<Transform>(ball).unwrap().translation.x;
+    assert!(x > 5.0, "the ball flew past the wall: {x}");
+    assert!(
+        app.world().resource::<Starts>().0.is_empty(),
+        "no contact seen"
+    );
+}
+
+#[test]
+fn continuous_collision_reports_the_crossing_with_its_time_of_impact() {
+    for kind in [ContinuousCollision::Always, ContinuousCollision::WhenFast] {
+        let (mut app, _) = scene(Some(kind), START, SPEED, false);
+        steps(&mut app, 6);
+        let starts = &app.world().resource::<Starts>().0;
+        assert_eq!(starts.len(), 1, "{kind:?}: one contact, {starts:?}");
+        let s = starts[0];
+        assert!(s.is_certain());
+        // It crosses in the step from x = -2 to x = 1.125. The surfaces meet when the
+        // centre is at -(WALL_HALF + r), r between the icosphere's inner radius and RADIUS.
+        let t = s.time_of_impact.expect("a time of impact");
+        let travel = SPEED * DEFAULT_STEP;
+        let at = |r: f32| (-(WALL_HALF + r) + 2.0) / travel;
+        assert!(
+            t >= at(RADIUS) - 1e-4 && t <= at(0.9 * RADIUS),
+            "{kind:?}: time of impact {t} outside [{}, {}]",
+            at(RADIUS),
+            at(0.9 * RADIUS)
+        );
+        let d = app.world().resource::<CollisionDiagnostics>().counters;
+        assert!(d.caught_by_sweep >= 1 && d.swept_pairs >= 1, "{d:?}");
+    }
+}
+
+#[test]
+fn when_fast_leaves_slow_motion_to_the_discrete_test() {
+    // 0.5 per second: 0.008 per step, far below a quarter of the ball's 0.3.
+    let (mut app, _) = scene(Some(ContinuousCollision::WhenFast), -0.4, 0.5, false);
+    steps(&mut app, 40);
+    let d = app.world().resource::<CollisionDiagnostics>().counters;
+    assert_eq!(d.swept_pairs, 0, "{d:?}");
+    // It reaches the wall (0.4 - 0.165 = 0.235 away) after about 30 steps: a discrete start.
+    let starts = &app.world().resource::<Starts>().0;
+    assert_eq!(starts.len(), 1);
+    assert_eq!(starts[0].time_of_impact, None);
+}
+
+#[test]
+fn the_impulse_response_sends_a_swept_ball_back_from_the_wall() {
+    let (mut app, ball) = scene(Some(ContinuousCollision::Always), START, SPEED, true);
+    steps(&mut app, 4);
+    let x = app.world().get::<Transform>(ball).unwrap().translation.x;
+    let v = app.world().get::<BodyVelocity>(ball).unwrap().0;
+    assert!(x < 0.0, "the ball stays on its side of the wall: x = {x}");
+    assert!(v.x < -0.5 * SPEED, "and bounces back: {v}");
+    // Without continuous collision the response never sees the wall.
+    let (mut app, ball) = scene(None, START, SPEED, true);
+    steps(&mut app, 4);
+    let x = app.world().get::<Transform>(ball).unwrap().translation.x;
+    assert!(x > 2.0, "{x}");
+}
