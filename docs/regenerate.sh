@@ -76,6 +76,7 @@ tracking() { # docs/tracking.md: tracking against the exact self-collision pass
         --json "docs/tracking/held_out/$mesh-seed$seed.json" | tee -a docs/tracking/held_out/output.txt
     done
   done
+  docs/tracking/budget.sh
 }
 
 plugin() { # docs/plugin.md: the plugin's stage timings and the pile's response runs

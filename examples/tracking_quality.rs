@@ -2,9 +2,13 @@
 //!
 //! ```text
 //! cargo run --release --example tracking_quality -- [--mesh PATH] [--frames 120] [--seed S] \
-//!     [--pairs-per-frame N] [--json out.json] [--out-dir DIR] [--sweep a,b,c | --no-sweep] \
-//!     [--sampling hierarchy|uniform|velocity] [--search two-step|full]
+//!     [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
+//!     [--sweep a,b,c | --no-sweep] [--sampling hierarchy|uniform|velocity] [--search two-step|full]
 //! ```
+//!
+//! `--budget-us US` gives the tracker a time budget per step (`TrackerConfig::time_budget`):
+//! it adapts its new pairs per frame, starting from `--pairs-per-frame`, to what the budget
+//! allows (no sweep then unless `--sweep` is given).
 //!
 //! The mesh (default: a generated capped tube, like a stretch of gut; any OBJ with `--mesh`)
 //! is animated by a seeded [`Whirl`]: its halves wind around an axis in opposite senses until
@@ -26,7 +30,8 @@
 //! whose triangles each share a vertex with the pair's),
 //! `regions`, `latency_frames_p95` (over the hit regions), `tracker_us_per_frame` (surface
 //! update + step), `exact_us_per_frame` (refit + exact pass), both in thread CPU time (the
-//! machine may be shared), `time_ratio`, `pairs_per_frame`,
+//! machine may be shared), `time_ratio`, `pairs_per_frame` (the configured one, the start under
+//! a budget), `mean_pairs_per_frame` (what the steps drew), `budget_us`,
 //! and the same for each `sweep` entry. Writes `frames.csv`, `sweep.csv`,
 //! `recall_vs_pairs.svg` and `time_vs_pairs.svg` to `--out-dir` (default
 //! `target/tracking_quality`). With `TRACKING_QUALITY_DEBUG=1`, each missed region is listed
@@ -84,6 +89,8 @@ struct Settings {
     sweep: Option<Vec<usize>>,
     sampling: Sampling,
     search: SearchMode,
+    /// The tracker's time budget per step, µs (`TrackerConfig::time_budget`).
+    budget_us: Option<u64>,
 }
 
 fn parse_args() -> Result<Settings, String> {
@@ -97,7 +104,9 @@ fn parse_args() -> Result<Settings, String> {
         sweep: Some(Vec::new()),
         sampling: Sampling::default(),
         search: SearchMode::default(),
+        budget_us: None,
     };
+    let mut explicit_sweep = false;
     let mut it = std::env::args_os().skip(1);
     let text = |v: Option<std::ffi::OsString>, flag: &str| -> Result<String, String> {
         v.and_then(|v| v.into_string().ok())
@@ -119,7 +128,15 @@ fn parse_args() -> Result<Settings, String> {
                 s.out_dir = PathBuf::from(it.next().ok_or("--out-dir needs a directory")?)
             }
             "--no-sweep" => s.sweep = None,
+            "--budget-us" => {
+                let us = number(it.next(), "--budget-us")?;
+                if us == 0 {
+                    return Err("--budget-us needs a positive number of microseconds".into());
+                }
+                s.budget_us = Some(us);
+            }
             "--sweep" => {
+                explicit_sweep = true;
                 let list = text(it.next(), "--sweep")?;
                 let values: Result<Vec<usize>, _> = list.split(',').map(str::parse).collect();
                 s.sweep = Some(values.map_err(|_| "--sweep needs numbers like 8,16,32")?);
@@ -145,10 +162,14 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --mesh, --frames, --seed, --pairs-per-frame, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
+                    "unknown argument `{other}` (known: --mesh, --frames, --seed, --pairs-per-frame, --budget-us, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
                 ));
             }
         }
+    }
+    // Under a time budget the tracker picks its own pairs per frame: no sweep unless asked.
+    if s.budget_us.is_some() && !explicit_sweep {
+        s.sweep = None;
     }
     if let Some(sw) = &mut s.sweep {
         if sw.is_empty() {
@@ -394,6 +415,10 @@ impl PointGrid {
 #[derive(Default, Clone)]
 struct RunResult {
     pairs_per_frame: usize,
+    /// New pairs per frame the steps drew, on average (under a time budget, adapted).
+    mean_pairs: f64,
+    /// The tracker's time budget per step, µs, if any.
+    budget_us: Option<u64>,
     recall: f64,
     false_contact_rate: f64,
     regions: usize,
@@ -428,6 +453,7 @@ fn run_tracker(
     let topology = Topology::new(mesh);
     let (mut exact_pairs, mut covered_pairs) = (0usize, 0usize);
     let mut covered: HashSet<(u32, u32)> = HashSet::new();
+    let mut pairs_drawn = 0usize;
     for (f, exact) in truth.frames.iter().enumerate() {
         whirl.positions(f, &mut positions);
         let t0 = cpu_us();
@@ -437,6 +463,7 @@ fn run_tracker(
         tracker.step_self(&surface);
         let us = cpu_us() - t0;
         total_us += us;
+        pairs_drawn += tracker.stats().pairs_per_frame;
         let grid = PointGrid::new(&exact.points, radius);
         let mut false_here = 0;
         let mut hit_here = Vec::new();
@@ -528,6 +555,8 @@ fn run_tracker(
     };
     RunResult {
         pairs_per_frame: config.pairs_per_frame,
+        mean_pairs: pairs_drawn as f64 / frames.max(1) as f64,
+        budget_us: config.time_budget.map(|b| b.as_micros() as u64),
         recall: if counted == 0 {
             1.0
         } else {
@@ -591,8 +620,10 @@ fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32
 
 fn json_run(r: &RunResult) -> String {
     format!(
-        "\"pairs_per_frame\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
+        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
         r.pairs_per_frame,
+        r.mean_pairs,
+        r.budget_us.map_or("null".to_owned(), |b| b.to_string()),
         r.recall,
         r.false_contact_rate,
         r.pair_coverage,
@@ -684,6 +715,7 @@ fn main() {
     let probe = TrackedSurface::new(mesh.clone());
     let mut config = TrackerConfig::for_surface(&probe);
     config.seed = settings.seed;
+    config.time_budget = settings.budget_us.map(std::time::Duration::from_micros);
     config.sampling = settings.sampling;
     config.search = settings.search;
     let tolerance = probe.mean_edge_length();
@@ -748,6 +780,12 @@ fn main() {
             r.tracker_us,
             r.exact_us,
             r.tracker_us / r.exact_us.max(1e-9)
+        );
+    }
+    if let Some(us) = settings.budget_us {
+        println!(
+            "time budget {us} µs per tracker step: {:.1} new pairs per frame on average (adapted from {})",
+            main_run.mean_pairs, main_run.pairs_per_frame
         );
     }
 

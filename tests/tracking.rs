@@ -537,3 +537,54 @@ fn close_pairs_of_the_colon_at_rest_lie_within_the_two_excluded_rings() {
     );
     assert_eq!(beyond(2), 0);
 }
+
+#[test]
+fn a_time_budget_adapts_the_pairs_per_frame_to_what_it_allows() {
+    use std::time::Duration;
+    let mesh = generate::tube(0.08, 2.0, 16, 80, true);
+    let mut surface = TrackedSurface::new(mesh.clone());
+    let whirl = Whirl::new(&mesh, 40, 2);
+    let base = TrackerConfig::for_surface(&surface);
+    let mut positions = Vec::new();
+    // A budget no step can miss: the pairs grow by half each step up to the cap of kept pairs.
+    let mut generous = Tracker::new(TrackerConfig {
+        time_budget: Some(Duration::from_secs(30)),
+        ..base.clone()
+    });
+    // A budget every step misses: halved each step, down to the floor of 8.
+    let mut tiny = Tracker::new(TrackerConfig {
+        time_budget: Some(Duration::from_nanos(1)),
+        ..base.clone()
+    });
+    let mut fixed = Tracker::new(base.clone());
+    let mut drawn = Vec::new();
+    for f in 0..12 {
+        whirl.positions(f, &mut positions);
+        surface.set_positions(&positions).unwrap();
+        drawn.push(generous.pairs_per_frame_now());
+        generous.step_self(&surface);
+        assert_eq!(generous.stats().pairs_per_frame, drawn[f]);
+        assert!(!generous.stats().cut);
+        tiny.step_self(&surface);
+        assert!(tiny.stats().cut, "every step of the tiny budget is cut");
+        fixed.step_self(&surface);
+        assert_eq!(fixed.stats().pairs_per_frame, base.pairs_per_frame);
+    }
+    assert_eq!(
+        drawn[0], base.pairs_per_frame,
+        "it starts from pairs_per_frame"
+    );
+    assert!(drawn.windows(2).all(|w| w[1] >= w[0]), "{drawn:?}");
+    assert_eq!(
+        generous.pairs_per_frame_now(),
+        base.max_active_pairs,
+        "{drawn:?}"
+    );
+    assert_eq!(tiny.pairs_per_frame_now(), 8);
+    // Contacts stay real under either budget.
+    let pose = Pose::IDENTITY;
+    let h = base.thickness;
+    let current = TriMesh::new(positions.clone(), mesh.triangles().to_vec()).unwrap();
+    check_contacts(generous.contacts(), &current, &pose, &current, &pose, h);
+    check_contacts(tiny.contacts(), &current, &pose, &current, &pose, h);
+}

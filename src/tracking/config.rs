@@ -65,6 +65,14 @@ pub struct TrackerConfig {
     pub propagation_limit: usize,
     /// Seed of the random pair generator (the tracker's stream is also keyed by the frame).
     pub seed: u64,
+    /// A time budget per step instead of a fixed number of new pairs: the step's end is a
+    /// deadline ([`Tracker::step_self_until`](super::Tracker::step_self_until)), and after
+    /// every step the new pairs per frame (starting from `pairs_per_frame`) are scaled towards
+    /// what fills 80 % of the budget, at most ×1.5 or ÷2 per step, between 8 and
+    /// `max_active_pairs` ([`Tracker::pairs_per_frame_now`](super::Tracker::pairs_per_frame_now)).
+    /// Results then depend on the machine's speed; `None` (the default): a fixed
+    /// `pairs_per_frame`, reproducible.
+    pub time_budget: Option<std::time::Duration>,
 }
 
 impl Default for TrackerConfig {
@@ -82,6 +90,7 @@ impl Default for TrackerConfig {
             max_active_pairs: 1024,
             propagation_limit: 256,
             seed: 0x5EED,
+            time_budget: None,
         }
     }
 }

@@ -25,6 +25,15 @@ const SLIDE_LIMIT_EDGES: f64 = 1.0;
 /// [`Tracker::step_self_until`]).
 const LATE_SHARE: usize = 8;
 
+/// Under a time budget: the share of the budget a step aims at (the rest absorbs the
+/// variation from frame to frame), the largest change of the pairs per frame after one step
+/// (a step that hits its deadline halves them), and the fewest pairs per frame. Controller
+/// settings, not fitted to any mesh.
+const ADAPT_TARGET: f64 = 0.8;
+const ADAPT_MIN_FACTOR: f64 = 0.5;
+const ADAPT_MAX_FACTOR: f64 = 1.5;
+const MIN_ADAPTIVE_PAIRS: usize = 8;
+
 /// A tracked pair of locally closest features, persistent across frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrackedPair {
@@ -56,6 +65,8 @@ pub type PairList = SmallVec<[TrackedPair; 16]>;
 /// What the last [`Tracker`] step did.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct StepStats {
+    /// New random pairs the step was to draw (see [`Tracker::pairs_per_frame_now`]).
+    pub pairs_per_frame: usize,
     /// New random pairs drawn.
     pub sampled: usize,
     /// Overlapping patch pairs of the incomplete hierarchy (hierarchy sampling).
@@ -113,6 +124,8 @@ pub struct StepStats {
 #[derive(Debug, Clone)]
 pub struct Tracker {
     config: TrackerConfig,
+    /// New pairs per frame under a time budget (adapted after every step).
+    adaptive_pairs: usize,
     pairs: PairList,
     contacts: Vec<Contact>,
     frame: u64,
@@ -134,6 +147,7 @@ impl Tracker {
     /// A tracker with no pairs yet.
     pub fn new(config: TrackerConfig) -> Self {
         Tracker {
+            adaptive_pairs: config.pairs_per_frame.max(1),
             config,
             pairs: PairList::new(),
             contacts: Vec::new(),
@@ -148,9 +162,23 @@ impl Tracker {
         &self.config
     }
 
-    /// Changes the configuration; kept pairs stay.
+    /// Changes the configuration; kept pairs stay (and, under a time budget, the pairs per
+    /// frame learnt so far).
     pub fn set_config(&mut self, config: TrackerConfig) {
+        if config.time_budget.is_none() || self.config.time_budget.is_none() {
+            self.adaptive_pairs = config.pairs_per_frame.max(1);
+        }
         self.config = config;
+    }
+
+    /// New random pairs the next step draws: [`TrackerConfig::pairs_per_frame`], or under
+    /// [`TrackerConfig::time_budget`] what the budget was found to allow.
+    pub fn pairs_per_frame_now(&self) -> usize {
+        if self.config.time_budget.is_some() {
+            self.adaptive_pairs
+        } else {
+            self.config.pairs_per_frame
+        }
     }
 
     /// The active pairs after the last step, closest first.
@@ -249,6 +277,8 @@ impl Tracker {
         &self.contacts
     }
 
+    /// One step; under a time budget, within it (its end is a deadline too) and followed by
+    /// the adaptation of the pairs per frame to what the step took.
     fn step(
         &mut self,
         a: Placed,
@@ -256,6 +286,38 @@ impl Tracker {
         self_mode: bool,
         size: f32,
         deadline: Option<Instant>,
+    ) {
+        let Some(budget) = self.config.time_budget else {
+            let n = self.config.pairs_per_frame;
+            self.step_with(a, b, self_mode, size, deadline, n);
+            return;
+        };
+        let start = Instant::now();
+        let own = start + budget;
+        let deadline = Some(deadline.map_or(own, |d| d.min(own)));
+        self.step_with(a, b, self_mode, size, deadline, self.adaptive_pairs);
+        let took = start.elapsed().as_secs_f64();
+        let factor = if self.stats.cut {
+            ADAPT_MIN_FACTOR
+        } else {
+            (ADAPT_TARGET * budget.as_secs_f64() / took.max(1e-9))
+                .clamp(ADAPT_MIN_FACTOR, ADAPT_MAX_FACTOR)
+        };
+        let next = (self.adaptive_pairs as f64 * factor).round() as usize;
+        self.adaptive_pairs = next.clamp(
+            MIN_ADAPTIVE_PAIRS,
+            self.config.max_active_pairs.max(MIN_ADAPTIVE_PAIRS),
+        );
+    }
+
+    fn step_with(
+        &mut self,
+        a: Placed,
+        b: Placed,
+        self_mode: bool,
+        size: f32,
+        deadline: Option<Instant>,
+        pairs_per_frame: usize,
     ) {
         let passed = || deadline.is_some_and(|d| Instant::now() >= d);
         let cfg = &self.config;
@@ -288,14 +350,15 @@ impl Tracker {
         // and an eighth of them searched, each kept pair searched every eighth step): a
         // tracker that starts late, or stays over its budget, still finds and follows its
         // contacts, only more slowly.
-        let late_fresh = cfg.pairs_per_frame.div_ceil(LATE_SHARE);
+        let late_fresh = pairs_per_frame.div_ceil(LATE_SHARE);
+        stats.pairs_per_frame = pairs_per_frame;
         stats.cut = passed();
         // Drawing has a cost of its own (hierarchy sampling looks for the overlapping patches
         // of the whole surface): late, it draws every eighth step only.
         let draw_now = !stats.cut || frame.is_multiple_of(LATE_SHARE as u64);
         draw(
             cfg.sampling,
-            if draw_now { cfg.pairs_per_frame } else { 0 },
+            if draw_now { pairs_per_frame } else { 0 },
             &a,
             &b,
             self_mode,
