@@ -1,13 +1,14 @@
 //! Stochastic tracking: one frame of self-collision tracking (surface update + step) against
-//! the exact self-collision pass (refit + `self_contacts`) on the same whirled positions, for
-//! a generated tube and the shared cloth and open colon.
+//! the exact self-collision pass (refit + `self_contacts_excluding`, the tracker's thickness and
+//! exclusion rings: the same answer the tracker approximates) on the same whirled positions,
+//! for a generated tube and the shared cloth and open colon.
 use std::hint::black_box;
 use std::time::Duration;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, self_contacts};
+use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, self_contacts_excluding};
 use stochastic_collision::deform::Whirl;
-use stochastic_collision::mesh::{TriMesh, generate};
+use stochastic_collision::mesh::{SelfExclusion, TriMesh, generate};
 use stochastic_collision::tracking::{TrackedSurface, Tracker, TrackerConfig};
 
 mod support;
@@ -41,6 +42,7 @@ fn bench(c: &mut Criterion) {
         let mut surface = TrackedSurface::new(mesh.clone());
         let config = TrackerConfig::for_surface(&surface);
         let thickness = config.thickness;
+        let exclusion = SelfExclusion::new(&mesh, config.exclusion_rings);
         let mut tracker = Tracker::new(config);
         let mut k = 0;
         group.bench_function("tracker_frame", |b| {
@@ -59,7 +61,10 @@ fn bench(c: &mut Criterion) {
                 cm.set_positions(&frames[k % frames.len()]).unwrap();
                 k += 1;
                 out.clear();
-                black_box(self_contacts(&cm, thickness, &mut ws, &mut out))
+                black_box(
+                    self_contacts_excluding(&cm, thickness, &exclusion, &mut ws, &mut out)
+                        .expect("the exclusion is built for this mesh"),
+                )
             })
         });
         group.finish();

@@ -13,9 +13,9 @@
 //! The mesh (default: a generated capped tube, like a stretch of gut; any OBJ with `--mesh`)
 //! is animated by a seeded [`Whirl`]: its halves wind around an axis in opposite senses until
 //! they cut through each other, then unwind, in episodes. Every frame, the exact pass
-//! ([`self_contacts`], after a refit) finds every pair of triangles closer than the thickness
+//! ([`self_contacts_excluding`], after a refit) finds every pair of triangles closer than the thickness
 //! (a tenth of the mean edge length) that are not adjacent in the tracker's sense (within one
-//! vertex ring, [`triangles_within_rings`]); a *contact region* is a connected set of
+//! vertex ring, `SelfExclusion`); a *contact region* is a connected set of
 //! them (triangles linked by a contact pair or a shared vertex), followed from frame to frame
 //! while it keeps a vertex in common with its previous shape or a contact point within two
 //! tolerances of one of its previous points (regions move); regions that merge are followed
@@ -46,12 +46,14 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 use plotters::prelude::*;
-use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, SelfContact, self_contacts};
+use stochastic_collision::bvh::{
+    CollisionMesh, QueryWorkspace, SelfContact, self_contacts_excluding,
+};
 use stochastic_collision::deform::Whirl;
 use stochastic_collision::geometry::closest_points_triangle_triangle;
-use stochastic_collision::mesh::{Topology, TriMesh, generate};
+use stochastic_collision::mesh::{SelfExclusion, Topology, TriMesh, generate};
 use stochastic_collision::tracking::{
-    Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig, triangles_within_rings,
+    Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig,
 };
 
 /// CPU time of the calling thread, µs: what the work cost, whatever else runs on the machine
@@ -246,6 +248,7 @@ fn exact_truth(
     continuity: f32,
 ) -> Truth {
     let topology = Topology::new(mesh);
+    let exclusion = SelfExclusion::from_topology(mesh, &topology, exclusion_rings);
     let mut cm = CollisionMesh::new(mesh.clone());
     let mut ws = QueryWorkspace::new();
     let mut pairs: Vec<SelfContact> = Vec::new();
@@ -265,12 +268,9 @@ fn exact_truth(
         cm.set_positions(&positions)
             .expect("the whirl keeps positions finite");
         pairs.clear();
-        self_contacts(&cm, thickness, &mut ws, &mut pairs);
         // The same adjacency as the tracker's (pairs within `exclusion_rings` rings).
-        pairs.retain(|c| {
-            let (a, b) = (tris[c.pair.a as usize], tris[c.pair.b as usize]);
-            !triangles_within_rings(&topology, a, b, exclusion_rings)
-        });
+        self_contacts_excluding(&cm, thickness, &exclusion, &mut ws, &mut pairs)
+            .expect("the exclusion is built for this mesh");
         let us = cpu_us() - t0;
         // Regions: triangles linked by a contact pair or a shared vertex.
         let mut ids: HashMap<u32, u32> = HashMap::new();

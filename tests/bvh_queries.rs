@@ -1,5 +1,7 @@
 //! The BVH queries against brute force (every triangle pair) on generated meshes, including
 //! degenerate input, extreme scales and far-from-origin placements, plus refit and solid checks.
+mod common;
+
 use std::collections::BTreeSet;
 
 use glam::{DVec3, Quat, Vec3};
@@ -291,21 +293,7 @@ fn refit_after_deformation_matches_a_fresh_build() {
 fn self_intersections_equal_brute_force() {
     let mut ws = QueryWorkspace::new();
     // A cloth folded through itself, and a sphere (no self-intersection).
-    let mut cloth = CollisionMesh::new(generate::cloth_grid(2.0, 2.0, 14, 14));
-    let folded: Vec<Vec3> = cloth
-        .mesh()
-        .positions()
-        .iter()
-        .map(|p| {
-            let a = p.x * 2.6;
-            Vec3::new(
-                0.5 * a.sin(),
-                0.5 * (1.0 - a.cos()) * a.signum() * 0.9,
-                p.z + 0.2 * p.x,
-            )
-        })
-        .collect();
-    cloth.set_positions(&folded).unwrap();
+    let cloth = CollisionMesh::new(common::folded_cloth());
     for mesh in [
         cloth,
         CollisionMesh::new(generate::icosphere(1.0, 2)),

@@ -37,6 +37,8 @@ pub use solid::contains_point;
 pub use traverse_pair::{
     ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with, root_boxes_overlap,
 };
-pub use traverse_self::{SelfContact, self_contacts, self_intersections, self_intersects};
+pub use traverse_self::{
+    SelfContact, self_contacts, self_contacts_excluding, self_intersections, self_intersects,
+};
 pub use tree::{Bvh, BvhNode};
 pub use workspace::{QueryWorkspace, TrianglePair};

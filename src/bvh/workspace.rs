@@ -1,4 +1,4 @@
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3, Vec3A};
 
 use crate::geometry::PoseF64;
 
@@ -22,6 +22,10 @@ pub struct TrianglePair {
 pub struct QueryWorkspace {
     pub(crate) stack: Vec<(u32, u32)>,
     pub(crate) distance_stack: Vec<(u32, u32, f32)>,
+    /// Per triangle in the tree's leaf order, its box (`min`, `max`) and its corners, filled
+    /// by the self queries.
+    pub(crate) triangle_boxes: Vec<[Vec3A; 2]>,
+    pub(crate) leaf_corners: Vec<[u32; 3]>,
     pub(crate) cache: TransformCache,
     pub(crate) node_pairs_visited: u64,
 }
@@ -61,6 +65,8 @@ impl QueryWorkspace {
         use std::mem::size_of;
         self.stack.capacity() * size_of::<(u32, u32)>()
             + self.distance_stack.capacity() * size_of::<(u32, u32, f32)>()
+            + self.triangle_boxes.capacity() * size_of::<[Vec3A; 2]>()
+            + self.leaf_corners.capacity() * size_of::<[u32; 3]>()
             + self.cache.points.capacity() * size_of::<DVec3>()
             + self.cache.stamps.capacity() * size_of::<u32>()
     }

@@ -54,6 +54,18 @@ pub enum MeshError {
         /// The scale given.
         scale: [f32; 3],
     },
+    /// A per-mesh structure (such as a [`SelfExclusion`](crate::mesh::SelfExclusion)) was
+    /// built for another mesh.
+    #[error(
+        "built for a mesh of {} vertices and {} triangles, used with one of {} vertices and {} triangles",
+        expected.0, expected.1, got.0, got.1
+    )]
+    TopologyMismatch {
+        /// Vertex and triangle counts of the mesh it was built for.
+        expected: (usize, usize),
+        /// Vertex and triangle counts of the mesh it was used with.
+        got: (usize, usize),
+    },
     /// The file could not be read.
     #[error("cannot read {path}: {message}")]
     Io {

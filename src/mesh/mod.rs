@@ -15,10 +15,12 @@ mod error;
 pub mod generate;
 mod mass;
 mod obj;
+mod rings;
 mod topology;
 mod tri_mesh;
 
 pub use error::MeshError;
 pub use mass::{MassModel, MassProperties};
+pub use rings::{SelfExclusion, adjacent, triangles_within_rings};
 pub use topology::{Edge, Topology};
 pub use tri_mesh::TriMesh;

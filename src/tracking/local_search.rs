@@ -8,7 +8,7 @@ use super::config::SearchMode;
 use super::feature::{Feature, reduce_to_feature};
 use super::surface::Placed;
 use crate::geometry::{ClosestPoints, closest_points_triangle_triangle};
-use crate::mesh::Topology;
+use crate::mesh::triangles_within_rings;
 
 /// Where a pair's search ended.
 #[derive(Debug, Clone, Copy)]
@@ -25,69 +25,6 @@ pub(crate) struct Located {
 pub(crate) struct SearchCounters {
     pub iterations: u64,
     pub evaluations: u64,
-}
-
-/// Two triangles of one mesh that share a vertex.
-#[inline]
-pub(crate) fn adjacent(a: [u32; 3], b: [u32; 3]) -> bool {
-    a.iter().any(|v| b.contains(v))
-}
-
-/// Whether triangles `a` and `b` of a mesh with `topology` are within `rings` edge steps of
-/// each other: with 0 they share a vertex; with 1 they share a vertex or an edge joins a
-/// vertex of one to a vertex of the other; and so on. Self-collision excludes such pairs.
-pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rings: u32) -> bool {
-    if adjacent(a, b) {
-        return true;
-    }
-    match rings {
-        0 => false,
-        1 => a
-            .iter()
-            .any(|&v| topology.vertex_neighbours(v).iter().any(|w| b.contains(w))),
-        2 => {
-            // Within two steps: some vertex of `a` and some vertex of `b` are neighbours or
-            // share a neighbour (a merge of two ascending lists).
-            a.iter().any(|&v| {
-                let nv = topology.vertex_neighbours(v);
-                b.iter().any(|&u| {
-                    let nu = topology.vertex_neighbours(u);
-                    if nv.binary_search(&u).is_ok() {
-                        return true;
-                    }
-                    let (mut i, mut j) = (0, 0);
-                    while i < nv.len() && j < nu.len() {
-                        match nv[i].cmp(&nu[j]) {
-                            std::cmp::Ordering::Less => i += 1,
-                            std::cmp::Ordering::Greater => j += 1,
-                            std::cmp::Ordering::Equal => return true,
-                        }
-                    }
-                    false
-                })
-            })
-        }
-        _ => {
-            let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
-            let mut frontier: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
-            for _ in 0..rings {
-                let mut next: SmallVec<[u32; 64]> = SmallVec::new();
-                for &v in &frontier {
-                    for &w in topology.vertex_neighbours(v) {
-                        if b.contains(&w) {
-                            return true;
-                        }
-                        if !seen.contains(&w) {
-                            seen.push(w);
-                            next.push(w);
-                        }
-                    }
-                }
-                frontier = next;
-            }
-            false
-        }
-    }
 }
 
 fn bounds(t: &[DVec3; 3]) -> (DVec3, DVec3) {
@@ -315,48 +252,5 @@ impl Searcher<'_> {
                     < l.cp.distance - self.epsilon
         };
         ca.iter().any(|&x| closer(x, l.tb)) || cb.iter().any(|&y| closer(l.ta, y))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::mesh::generate;
-
-    #[test]
-    fn ring_fast_paths_agree_with_the_search() {
-        let mesh = generate::torus(1.0, 0.3, 24, 12);
-        let topo = Topology::new(&mesh);
-        let tris = mesh.triangles();
-        // Reference: edge-step distances from `a`'s corners to every vertex (a plain
-        // breadth-first labelling of the whole mesh), then the nearest corner of `b`.
-        let slow = |a: [u32; 3], b: [u32; 3], rings: u32| {
-            let mut dist = vec![u32::MAX; mesh.vertex_count()];
-            let mut queue = std::collections::VecDeque::new();
-            for v in a {
-                dist[v as usize] = 0;
-                queue.push_back(v);
-            }
-            while let Some(v) = queue.pop_front() {
-                for &w in topo.vertex_neighbours(v) {
-                    if dist[w as usize] == u32::MAX {
-                        dist[w as usize] = dist[v as usize] + 1;
-                        queue.push_back(w);
-                    }
-                }
-            }
-            b.iter().map(|&v| dist[v as usize]).min().unwrap() <= rings
-        };
-        for i in (0..tris.len()).step_by(37) {
-            for j in 0..tris.len() {
-                for rings in 0..4 {
-                    assert_eq!(
-                        triangles_within_rings(&topo, tris[i], tris[j], rings),
-                        slow(tris[i], tris[j], rings),
-                        "{i} {j} {rings}"
-                    );
-                }
-            }
-        }
     }
 }

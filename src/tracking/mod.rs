@@ -42,10 +42,10 @@ mod sampling;
 mod surface;
 mod tracker;
 
+pub use crate::mesh::triangles_within_rings;
 pub use config::{Sampling, SearchMode, TrackerConfig};
 pub use contact::Contact;
 pub use feature::{Feature, FeatureShape, FeatureVertices, feature_distance};
-pub use local_search::triangles_within_rings;
 pub use pruning::PruneCounts;
 pub use surface::{DEFAULT_PATCH_SIZE, TrackedSurface};
 pub use tracker::{PairList, StepStats, TrackedPair, Tracker};

@@ -5,10 +5,10 @@ use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::config::Sampling;
-use super::local_search::{adjacent, triangles_within_rings};
 use super::patch_tree::{box_transform, random_leaf_pair};
 use super::surface::{Placed, TrackedSurface};
 use crate::geometry::closest_points_triangle_triangle;
+use crate::mesh::{adjacent, triangles_within_rings};
 use glam::Vec3;
 
 /// Scratch memory of the samplers, reused across frames.

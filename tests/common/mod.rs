@@ -48,3 +48,23 @@ pub fn shared_mesh(file: &str) -> Option<PathBuf> {
     );
     None
 }
+
+/// A 14 × 14 cloth grid folded through itself (its halves cross along a curve): a mesh with
+/// self-intersections and near pairs at every distance.
+pub fn folded_cloth() -> stochastic_collision::mesh::TriMesh {
+    let mut cloth = stochastic_collision::mesh::generate::cloth_grid(2.0, 2.0, 14, 14);
+    let folded: Vec<glam::Vec3> = cloth
+        .positions()
+        .iter()
+        .map(|p| {
+            let a = p.x * 2.6;
+            glam::Vec3::new(
+                0.5 * a.sin(),
+                0.5 * (1.0 - a.cos()) * a.signum() * 0.9,
+                p.z + 0.2 * p.x,
+            )
+        })
+        .collect();
+    cloth.set_positions(&folded).unwrap();
+    cloth
+}

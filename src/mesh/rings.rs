@@ -1,0 +1,288 @@
+//! Nearness of two triangles of one mesh along its surface: sharing a vertex, or within a
+//! number of vertex rings. Self-collision passes exclude such pairs (they touch or nearly touch
+//! by construction).
+use smallvec::SmallVec;
+
+use super::Topology;
+
+/// Two triangles of one mesh that share a vertex.
+#[inline]
+pub fn adjacent(a: [u32; 3], b: [u32; 3]) -> bool {
+    a.iter().any(|v| b.contains(v))
+}
+
+/// Whether triangles `a` and `b` of a mesh with `topology` are within `rings` edge steps of
+/// each other: with 0 they share a vertex; with 1 they share a vertex or an edge joins a
+/// vertex of one to a vertex of the other; and so on. Self-collision excludes such pairs.
+pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rings: u32) -> bool {
+    if adjacent(a, b) {
+        return true;
+    }
+    match rings {
+        0 => false,
+        1 => a
+            .iter()
+            .any(|&v| topology.vertex_neighbours(v).iter().any(|w| b.contains(w))),
+        2 => {
+            // Within two steps: some vertex of `a` and some vertex of `b` are neighbours or
+            // share a neighbour (a merge of two ascending lists).
+            a.iter().any(|&v| {
+                let nv = topology.vertex_neighbours(v);
+                b.iter().any(|&u| {
+                    let nu = topology.vertex_neighbours(u);
+                    if nv.binary_search(&u).is_ok() {
+                        return true;
+                    }
+                    let (mut i, mut j) = (0, 0);
+                    while i < nv.len() && j < nu.len() {
+                        match nv[i].cmp(&nu[j]) {
+                            std::cmp::Ordering::Less => i += 1,
+                            std::cmp::Ordering::Greater => j += 1,
+                            std::cmp::Ordering::Equal => return true,
+                        }
+                    }
+                    false
+                })
+            })
+        }
+        _ => {
+            let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
+            let mut frontier: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
+            for _ in 0..rings {
+                let mut next: SmallVec<[u32; 64]> = SmallVec::new();
+                for &v in &frontier {
+                    for &w in topology.vertex_neighbours(v) {
+                        if b.contains(&w) {
+                            return true;
+                        }
+                        if !seen.contains(&w) {
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                frontier = next;
+            }
+            false
+        }
+    }
+}
+
+/// The pairs of triangles of one mesh that a self-collision pass leaves out: those within
+/// `rings` vertex rings of each other ([`triangles_within_rings`]), decided by one merge of two
+/// short sorted lists computed once per triangle.
+///
+/// Two triangles are within `r` rings when some vertex of one is at most `r` edges from some
+/// vertex of the other. That holds exactly when the vertices within `⌈r/2⌉` edges of one
+/// triangle and those within `⌊r/2⌋` edges of the other share a vertex; both sets are stored per
+/// triangle as sorted lists (about 12 entries for two rings on a regular mesh: one 64-byte
+/// line per triangle and list, longer lists in a shared array). Build it once per mesh; it holds for any positions of that mesh.
+///
+/// # Example
+/// ```
+/// use stochastic_collision::mesh::{SelfExclusion, Topology, generate, triangles_within_rings};
+/// let sheet = generate::cloth_grid(1.0, 1.0, 6, 6);
+/// let exclusion = SelfExclusion::new(&sheet, 2);
+/// let topology = Topology::new(&sheet);
+/// let tris = sheet.triangles();
+/// for a in 0..tris.len() as u32 {
+///     for b in 0..tris.len() as u32 {
+///         assert_eq!(
+///             exclusion.excludes(a, b),
+///             triangles_within_rings(&topology, tris[a as usize], tris[b as usize], 2)
+///         );
+///     }
+/// }
+/// ```
+#[derive(Debug, Clone)]
+pub struct SelfExclusion {
+    rings: u32,
+    vertices: usize,
+    /// Per triangle, the sorted vertices within `⌈rings/2⌉` edges of a corner.
+    outer: Neighbourhoods,
+    /// The same within `⌊rings/2⌋` edges, kept only when that differs (odd `rings`).
+    inner: Option<Neighbourhoods>,
+}
+
+impl SelfExclusion {
+    /// The exclusion of pairs within `rings` rings on `mesh` (0: pairs sharing a vertex).
+    pub fn new(mesh: &super::TriMesh, rings: u32) -> Self {
+        Self::from_topology(mesh, &Topology::new(mesh), rings)
+    }
+
+    /// The same from the mesh's [`Topology`], when it is already at hand.
+    pub fn from_topology(mesh: &super::TriMesh, topology: &Topology, rings: u32) -> Self {
+        SelfExclusion {
+            rings,
+            vertices: mesh.vertex_count(),
+            outer: Neighbourhoods::new(mesh, topology, rings.div_ceil(2)),
+            inner: (rings % 2 == 1).then(|| Neighbourhoods::new(mesh, topology, rings / 2)),
+        }
+    }
+
+    /// How many rings are excluded.
+    pub fn rings(&self) -> u32 {
+        self.rings
+    }
+
+    /// Vertex and triangle counts of the mesh it was built for.
+    pub fn mesh_size(&self) -> (usize, usize) {
+        (self.vertices, self.outer.short.len())
+    }
+
+    /// Whether triangles `a` and `b` (indices into the mesh it was built for) are within the
+    /// excluded rings: the same answer as [`triangles_within_rings`] on their corners.
+    ///
+    /// # Panics
+    /// If `a` or `b` is not a triangle of that mesh.
+    #[inline]
+    pub fn excludes(&self, a: u32, b: u32) -> bool {
+        let list_b = self.inner.as_ref().unwrap_or(&self.outer).get(b);
+        sorted_lists_meet(self.outer.get(a), list_b)
+    }
+}
+
+/// Entries a triangle's list holds in place (one cache line with its length).
+const SHORT: usize = 15;
+
+/// A triangle's sorted list when it is short enough, in one cache line.
+#[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
+struct ShortList {
+    /// Entries in `items`, or `u32::MAX` when the list is in the long lists.
+    len: u32,
+    items: [u32; SHORT],
+}
+
+/// Per triangle, a sorted list of vertices: in place when short, else in a CSR array.
+#[derive(Debug, Clone)]
+struct Neighbourhoods {
+    short: Vec<ShortList>,
+    /// CSR offsets (`triangle count + 1`) into `long`; only long lists have entries.
+    long_offsets: Vec<u32>,
+    long: Vec<u32>,
+}
+
+impl Neighbourhoods {
+    /// Per triangle of `mesh`, the sorted vertices at most `k` edges from one of its corners
+    /// (the corners included).
+    fn new(mesh: &super::TriMesh, topology: &Topology, k: u32) -> Self {
+        let mut out = Neighbourhoods {
+            short: Vec::with_capacity(mesh.triangle_count()),
+            long_offsets: Vec::with_capacity(mesh.triangle_count() + 1),
+            long: Vec::new(),
+        };
+        out.long_offsets.push(0);
+        let mut seen: Vec<u32> = Vec::new();
+        let mut frontier: Vec<u32> = Vec::new();
+        let mut next: Vec<u32> = Vec::new();
+        for corners in mesh.triangles() {
+            seen.clear();
+            frontier.clear();
+            for &v in corners {
+                if !seen.contains(&v) {
+                    seen.push(v);
+                    frontier.push(v);
+                }
+            }
+            for _ in 0..k {
+                next.clear();
+                for &u in &frontier {
+                    for &w in topology.vertex_neighbours(u) {
+                        if !seen.contains(&w) {
+                            seen.push(w);
+                            next.push(w);
+                        }
+                    }
+                }
+                std::mem::swap(&mut frontier, &mut next);
+            }
+            seen.sort_unstable();
+            let mut list = ShortList {
+                len: u32::MAX,
+                items: [0; SHORT],
+            };
+            if seen.len() <= SHORT {
+                list.len = seen.len() as u32;
+                list.items[..seen.len()].copy_from_slice(&seen);
+            } else {
+                out.long.extend_from_slice(&seen);
+            }
+            out.short.push(list);
+            out.long_offsets.push(out.long.len() as u32);
+        }
+        out
+    }
+
+    #[inline]
+    fn get(&self, t: u32) -> &[u32] {
+        let list = &self.short[t as usize];
+        if list.len != u32::MAX {
+            &list.items[..list.len as usize]
+        } else {
+            let (s, e) = (
+                self.long_offsets[t as usize] as usize,
+                self.long_offsets[t as usize + 1] as usize,
+            );
+            &self.long[s..e]
+        }
+    }
+}
+
+/// Whether two ascending lists share an entry (a merge without unpredictable branches).
+#[inline]
+fn sorted_lists_meet(a: &[u32], b: &[u32]) -> bool {
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() && j < b.len() {
+        let (x, y) = (a[i], b[j]);
+        if x == y {
+            return true;
+        }
+        i += (x < y) as usize;
+        j += (y < x) as usize;
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    #[test]
+    fn ring_fast_paths_agree_with_the_search() {
+        let mesh = generate::torus(1.0, 0.3, 24, 12);
+        let topo = Topology::new(&mesh);
+        let tris = mesh.triangles();
+        // Reference: edge-step distances from `a`'s corners to every vertex (a plain
+        // breadth-first labelling of the whole mesh), then the nearest corner of `b`.
+        let slow = |a: [u32; 3], b: [u32; 3], rings: u32| {
+            let mut dist = vec![u32::MAX; mesh.vertex_count()];
+            let mut queue = std::collections::VecDeque::new();
+            for v in a {
+                dist[v as usize] = 0;
+                queue.push_back(v);
+            }
+            while let Some(v) = queue.pop_front() {
+                for &w in topo.vertex_neighbours(v) {
+                    if dist[w as usize] == u32::MAX {
+                        dist[w as usize] = dist[v as usize] + 1;
+                        queue.push_back(w);
+                    }
+                }
+            }
+            b.iter().map(|&v| dist[v as usize]).min().unwrap() <= rings
+        };
+        for i in (0..tris.len()).step_by(37) {
+            for j in 0..tris.len() {
+                for rings in 0..4 {
+                    assert_eq!(
+                        triangles_within_rings(&topo, tris[i], tris[j], rings),
+                        slow(tris[i], tris[j], rings),
+                        "{i} {j} {rings}"
+                    );
+                }
+            }
+        }
+    }
+}
