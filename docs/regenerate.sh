@@ -54,6 +54,10 @@ ccd_plugin() { # docs/ccd.md: continuous collision in the plugin (tunnel, cannon
 }
 
 tracking() { # docs/tracking.md: tracking against the exact self-collision pass
+  # The exact self pass against parry3d's (quoted in its own section).
+  { echo "\$ cargo bench --bench self_pass_vs_parry"
+    cargo bench --quiet --bench self_pass_vs_parry 2>/dev/null; } |
+    tee docs/tracking/self_pass/output.txt
   local q="cargo run --release --quiet --example tracking_quality --"
   # Training meshes (the tracker's constants were chosen on these, seed 1).
   $q --frames 480 --sweep 16,32,64,128,256 --out-dir docs/tracking/generated_tube \

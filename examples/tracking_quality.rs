@@ -25,7 +25,14 @@
 //! hits none.
 //!
 //! JSON fields: `recall` (regions hit within 3 frames of their first appearance; regions that
-//! appear in the last 3 frames and are not hit yet are left out), `false_contact_rate`,
+//! appear in the last 3 frames and are not hit yet are left out), `false_contact_rate` (contacts
+//! farther than thickness + tolerance from every exact contact point),
+//! `strict_false_contact_rate` (contacts whose triangle pair the exact pass does not report: its
+//! triangles are farther apart than the thickness, no tolerance), `depth_error_mean`/`_p95`
+//! (over the other contacts whose triangles are apart: |reported depth − (thickness − exact
+//! distance)| over the thickness), `normal_error_deg_mean`/`_p95` (the angle from the exact
+//! closest points' direction; contacts on crossing triangles have no exact depth or direction
+//! and are left out of both),
 //! `pair_coverage` (the exact contact triangle pairs, over all frames, with a reported contact
 //! whose triangles each share a vertex with the pair's),
 //! `regions`, `latency_frames_p95` (over the hit regions), `tracker_us_per_frame` (surface
@@ -429,6 +436,19 @@ struct RunResult {
     /// triangles each share a vertex with (or are) the pair's, in either order: how much of
     /// each region the tracker covers, not only whether it found the region.
     pair_coverage: f64,
+    /// Reported contacts whose triangle pair is not among the exact pass's pairs (no
+    /// tolerance: the two triangles are farther apart than the thickness).
+    strict_false_rate: f64,
+    /// Contacts reported over all frames.
+    contacts: usize,
+    /// Over reported contacts whose triangles the exact pass finds apart (not crossing):
+    /// |reported depth − (thickness − exact distance)| over the thickness, mean and p95.
+    depth_error: (f64, f64),
+    /// How many contacts, over all frames, the depth and normal errors are taken over.
+    apart_contacts: usize,
+    /// Over the same contacts: the angle between the reported normal and the exact closest
+    /// points' direction (from `triangle_a` to `triangle_b`), degrees, mean and p95.
+    normal_error_deg: (f64, f64),
     /// Per frame: (contacts, false contacts, active pairs, µs, regions hit).
     per_frame: Vec<(usize, usize, usize, f64, usize)>,
 }
@@ -454,6 +474,9 @@ fn run_tracker(
     let (mut exact_pairs, mut covered_pairs) = (0usize, 0usize);
     let mut covered: HashSet<(u32, u32)> = HashSet::new();
     let mut pairs_drawn = 0usize;
+    let mut strict_false = 0usize;
+    let (mut depth_errors, mut normal_errors) = (Vec::new(), Vec::new());
+    let mut exact_set: HashSet<(u32, u32)> = HashSet::new();
     for (f, exact) in truth.frames.iter().enumerate() {
         whirl.positions(f, &mut positions);
         let t0 = cpu_us();
@@ -485,6 +508,31 @@ fn run_tracker(
         }
         reported += tracker.contacts().len();
         false_contacts += false_here;
+        // Untimed: each contact against the exact pass's answer for its triangle pair.
+        exact_set.clear();
+        exact_set.extend(
+            exact
+                .triangle_pairs
+                .iter()
+                .map(|&(a, b)| (a.min(b), a.max(b))),
+        );
+        for c in tracker.contacts() {
+            let (a, b) = (c.triangle_a, c.triangle_b);
+            if !exact_set.contains(&(a.min(b), a.max(b))) {
+                strict_false += 1;
+                continue;
+            }
+            let tri =
+                |t: u32| mesh.triangles()[t as usize].map(|v| positions[v as usize].as_dvec3());
+            let cp = closest_points_triangle_triangle(&tri(a), &tri(b));
+            if cp.distance > 0.0 {
+                let h = config.thickness as f64;
+                depth_errors.push((c.depth as f64 - (h - cp.distance)).abs() / h);
+                let exact_normal = (cp.point_b - cp.point_a) / cp.distance;
+                let cos = c.normal.as_dvec3().normalize_or_zero().dot(exact_normal);
+                normal_errors.push(cos.clamp(-1.0, 1.0).acos().to_degrees());
+            }
+        }
         // Untimed: the triangle pairs near a reported contact, then the exact pairs among them.
         covered.clear();
         for c in tracker.contacts() {
@@ -547,11 +595,10 @@ fn run_tracker(
             detected += usize::from(in_time);
         }
     }
-    latencies.sort_by(f64::total_cmp);
-    let p95 = if latencies.is_empty() {
-        0.0
-    } else {
-        latencies[((latencies.len() as f64 * 0.95).ceil() as usize).clamp(1, latencies.len()) - 1]
+    let latency_p95 = p95(&mut latencies);
+    let mean_p95 = |v: &mut Vec<f64>| {
+        let mean = v.iter().sum::<f64>() / v.len().max(1) as f64;
+        (mean, p95(v))
     };
     RunResult {
         pairs_per_frame: config.pairs_per_frame,
@@ -567,8 +614,17 @@ fn run_tracker(
         } else {
             false_contacts as f64 / reported as f64
         },
+        strict_false_rate: if reported == 0 {
+            0.0
+        } else {
+            strict_false as f64 / reported as f64
+        },
+        contacts: reported,
+        apart_contacts: depth_errors.len(),
+        depth_error: mean_p95(&mut depth_errors),
+        normal_error_deg: mean_p95(&mut normal_errors),
         regions: counted,
-        latency_p95: p95,
+        latency_p95,
         tracker_us: total_us / frames as f64,
         exact_us: truth.frames.iter().map(|f| f.us).sum::<f64>() / frames as f64,
         pair_coverage: if exact_pairs == 0 {
@@ -577,6 +633,16 @@ fn run_tracker(
             covered_pairs as f64 / exact_pairs as f64
         },
         per_frame,
+    }
+}
+
+/// The 95th percentile of `v` (sorted in place; 0 when empty).
+fn p95(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    if v.is_empty() {
+        0.0
+    } else {
+        v[((v.len() as f64 * 0.95).ceil() as usize).clamp(1, v.len()) - 1]
     }
 }
 
@@ -620,12 +686,19 @@ fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32
 
 fn json_run(r: &RunResult) -> String {
     format!(
-        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
+        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"strict_false_contact_rate\": {:.4}, \"contacts\": {}, \"apart_contacts\": {}, \"depth_error_mean\": {:.3e}, \"depth_error_p95\": {:.3e}, \"normal_error_deg_mean\": {:.3e}, \"normal_error_deg_p95\": {:.3e}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
         r.pairs_per_frame,
         r.mean_pairs,
         r.budget_us.map_or("null".to_owned(), |b| b.to_string()),
         r.recall,
         r.false_contact_rate,
+        r.strict_false_rate,
+        r.contacts,
+        r.apart_contacts,
+        r.depth_error.0,
+        r.depth_error.1,
+        r.normal_error_deg.0,
+        r.normal_error_deg.1,
         r.pair_coverage,
         r.regions,
         r.latency_p95,
@@ -757,10 +830,14 @@ fn main() {
         .unwrap_or_default();
 
     println!(
-        "{:>8} {:>8} {:>8} {:>9} {:>8} {:>9} {:>12} {:>12} {:>7}",
+        "{:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9} {:>12} {:>12} {:>7}",
         "pairs/f",
         "recall",
         "false",
+        "strict",
+        "apart",
+        "depth95",
+        "normal95",
         "coverage",
         "regions",
         "lat.p95",
@@ -770,10 +847,14 @@ fn main() {
     );
     for r in &results {
         println!(
-            "{:>8} {:>8.3} {:>8.3} {:>9.3} {:>8} {:>9.1} {:>12.0} {:>12.0} {:>7.3}",
+            "{:>8} {:>8.3} {:>8.3} {:>8.3} {:>9} {:>9.1e} {:>8.1e}° {:>9.3} {:>8} {:>9.1} {:>12.0} {:>12.0} {:>7.3}",
             r.pairs_per_frame,
             r.recall,
             r.false_contact_rate,
+            r.strict_false_rate,
+            format!("{}/{}", r.apart_contacts, r.contacts),
+            r.depth_error.1,
+            r.normal_error_deg.1,
             r.pair_coverage,
             r.regions,
             r.latency_p95,
@@ -814,15 +895,18 @@ fn main() {
         );
     }
     let mut sweep_csv = String::from(
-        "pairs_per_frame,recall,false_contact_rate,pair_coverage,regions,latency_frames_p95,tracker_us_per_frame,exact_us_per_frame\n",
+        "pairs_per_frame,recall,false_contact_rate,strict_false_contact_rate,depth_error_p95,normal_error_deg_p95,pair_coverage,regions,latency_frames_p95,tracker_us_per_frame,exact_us_per_frame\n",
     );
     for r in &results {
         let _ = writeln!(
             sweep_csv,
-            "{},{:.4},{:.4},{:.4},{},{:.1},{:.1},{:.1}",
+            "{},{:.4},{:.4},{:.4},{:.3e},{:.3e},{:.4},{},{:.1},{:.1},{:.1}",
             r.pairs_per_frame,
             r.recall,
             r.false_contact_rate,
+            r.strict_false_rate,
+            r.depth_error.1,
+            r.normal_error_deg.1,
             r.pair_coverage,
             r.regions,
             r.latency_p95,

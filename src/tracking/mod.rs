@@ -25,8 +25,10 @@
 //! triangle normal, [`Sampling::Hierarchy`] traverses every overlapping patch pair,
 //! [`Sampling::Velocity`] weighs every triangle, and self-collision's crease probes scan every
 //! edge for folds. A deadline ([`Tracker::step_self_until`]) cuts the searching, not that
-//! work. What tracking finds and misses against the exact self-collision pass
-//! ([`crate::bvh::self_contacts`]) is measured by `examples/tracking_quality.rs`.
+//! work. What tracking finds and misses against the exact self-collision pass with the same
+//! exclusion ([`crate::bvh::self_contacts_excluding`] with a [`crate::mesh::SelfExclusion`] of
+//! [`TrackerConfig::exclusion_rings`]) is measured by `examples/tracking_quality.rs`; on small
+//! and flat meshes that exact pass can cost less than a tracker step (`docs/tracking.md`).
 //!
 //! Next: [`crate::ccd`], continuous collision over a time step; or [`crate::ecs`], whose
 //! plugin runs a tracker for every pair and self-colliding mesh with
