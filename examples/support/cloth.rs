@@ -12,6 +12,12 @@ pub const DEFAULT_SHEETS: usize = 2;
 
 const DT: f32 = 1.0 / 60.0;
 
+/// A radius inside every face of the ball (an icosphere of radius 0.5, 3 subdivisions, whose
+/// faces come within about 0.002 of its corners' sphere).
+pub const BALL_INSCRIBED: f32 = 0.49;
+/// Height of the floor's top face.
+pub const FLOOR_TOP: f32 = -0.6;
+
 /// Verlet state of a sheet: previous positions and the grid's edges with rest lengths.
 #[derive(Component, Debug, Clone)]
 pub struct ClothState {
@@ -51,7 +57,7 @@ pub fn setup(app: &mut App, options: &Options) {
     ));
     world.spawn((
         MeshCollider::new(generate::cuboid(Vec3::new(3.0, 0.25, 3.0), 4)),
-        ColliderPose::from_translation(Vec3::new(0.0, -0.85, 0.0)),
+        ColliderPose::from_translation(Vec3::new(0.0, FLOOR_TOP - 0.25, 0.0)),
         Fidelity::Exact,
     ));
     for k in 0..options.count(DEFAULT_SHEETS) {

@@ -107,9 +107,10 @@ fn meeting_point(ta: &[Vec3; 3], tb: &[Vec3; 3]) -> Vec3 {
 }
 
 /// The contact of an intersecting triangle pair: point in the middle of the segment where
-/// they cross (see `meeting_point`), normal of the larger triangle (the reference face, as in box-box manifolds: a face meeting an edge or a
-/// corner; outward normals of closed meshes push the second along the first's normal and
-/// against its own), depth of the deeper triangle behind the other's plane (the
+/// they cross (see `meeting_point`), normal of the reference face: the closed mesh's triangle
+/// when only one of the two meshes is closed, else the larger triangle (as in box-box
+/// manifolds: a face meeting an edge or a corner; outward normals of closed meshes push the
+/// second along the first's normal and against its own), depth of the deeper triangle behind the other's plane (the
 /// smaller of the two, so a huge triangle's far corners do not count).
 pub(crate) fn triangle_pair_contact(
     a: &CollisionMesh,
@@ -123,7 +124,14 @@ pub(crate) fn triangle_pair_contact(
     let (ca, cb) = (centroid(&ta), centroid(&tb));
     let (na, nb) = (unit_normal(&ta), unit_normal(&tb));
     let area = |t: &[Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).length_squared();
-    let mut normal = if area(&ta) >= area(&tb) { na } else { -nb };
+    // An open mesh's face normals can point either way (a sheet has no outside): against a
+    // closed mesh, the closed one's outward normal is the reference.
+    let a_reference = match (a.is_closed(), b.is_closed()) {
+        (true, false) => true,
+        (false, true) => false,
+        _ => area(&ta) >= area(&tb),
+    };
+    let mut normal = if a_reference { na } else { -nb };
     if normal == Vec3::ZERO {
         normal = (cb - ca).normalize_or(Vec3::Y);
     }

@@ -10,17 +10,21 @@
 //!   decides every triangle pair of the exact queries.
 //! - [`closest_points_triangle_triangle`], [`closest_points_segment_segment`] and
 //!   [`closest_point_on_triangle`]: distances and closest points.
+//! - [`barycentric_weights`] and [`spread_to_corners`]: a correction at a point of a triangle
+//!   spread to its corners (the deformable penalty response).
 //! - [`predicates`]: the exact orientation predicates underneath.
 //!
 //! Next: [`crate::bvh`] runs these tests over whole meshes.
 
 mod aabb;
+mod barycentric;
 mod closest_points;
 mod pose;
 pub mod predicates;
 mod tri_tri;
 
 pub use aabb::Aabb;
+pub use barycentric::{barycentric_weights, spread_to_corners};
 pub use closest_points::{
     ClosestPoints, closest_point_on_triangle, closest_points_segment_segment,
     closest_points_triangle_triangle,
