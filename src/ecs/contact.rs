@@ -72,6 +72,23 @@ fn plane_cut(
     ends
 }
 
+/// The open mesh's face normal `n` at `point`, turned to point towards (`towards = 1`) or away
+/// from (`-1`) the centre of the closed mesh's box; `None` when that centre lies (nearly) in the
+/// face's plane.
+fn open_face_normal(
+    n: Vec3,
+    closed: &CollisionMesh,
+    pose: &Pose,
+    point: Vec3,
+    towards: f32,
+) -> Option<Vec3> {
+    let bounds = closed.bvh().root_aabb();
+    let centre = pose.transform_point(bounds.center());
+    let to_centre = centre - point;
+    let side = n.dot(to_centre);
+    (side.abs() > 1e-3 * to_centre.length()).then(|| n * side.signum() * towards)
+}
+
 /// A point where two intersecting triangles meet: the middle of their intersection segment
 /// (the overlap of each triangle's cut by the other's plane), or, for coplanar or nearly
 /// coplanar triangles, the smaller triangle's centroid on the larger one's plane.
@@ -107,10 +124,11 @@ fn meeting_point(ta: &[Vec3; 3], tb: &[Vec3; 3]) -> Vec3 {
 }
 
 /// The contact of an intersecting triangle pair: point in the middle of the segment where
-/// they cross (see `meeting_point`), normal of the reference face: the closed mesh's triangle
-/// when only one of the two meshes is closed, else the larger triangle (as in box-box
-/// manifolds: a face meeting an edge or a corner; outward normals of closed meshes push the
-/// second along the first's normal and against its own), depth of the deeper triangle behind the other's plane (the
+/// they cross (see `meeting_point`), normal of the reference face: between an open and a
+/// closed mesh, the open one's triangle turned towards the closed one's centre (the closed
+/// one's outward normal when that centre lies in the plane); else the larger triangle (as in
+/// box-box manifolds: a face meeting an edge or a corner; outward normals of closed meshes push
+/// the second along the first's normal and against its own), depth of the deeper triangle behind the other's plane (the
 /// smaller of the two, so a huge triangle's far corners do not count).
 pub(crate) fn triangle_pair_contact(
     a: &CollisionMesh,
@@ -124,14 +142,15 @@ pub(crate) fn triangle_pair_contact(
     let (ca, cb) = (centroid(&ta), centroid(&tb));
     let (na, nb) = (unit_normal(&ta), unit_normal(&tb));
     let area = |t: &[Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).length_squared();
-    // An open mesh's face normals can point either way (a sheet has no outside): against a
-    // closed mesh, the closed one's outward normal is the reference.
-    let a_reference = match (a.is_closed(), b.is_closed()) {
-        (true, false) => true,
-        (false, true) => false,
-        _ => area(&ta) >= area(&tb),
+    let mut normal = match (a.is_closed(), b.is_closed()) {
+        // An open mesh's face normals can point either way (a sheet has no outside): against
+        // a closed mesh, its face normal turned towards the closed mesh's centre (push the
+        // closed one away from the sheet to the side where its bulk is).
+        (false, true) => open_face_normal(na, b, pose_b, ca, 1.0).unwrap_or(-nb),
+        (true, false) => open_face_normal(nb, a, pose_a, cb, -1.0).unwrap_or(na),
+        _ if area(&ta) >= area(&tb) => na,
+        _ => -nb,
     };
-    let mut normal = if a_reference { na } else { -nb };
     if normal == Vec3::ZERO {
         normal = (cb - ca).normalize_or(Vec3::Y);
     }

@@ -12,7 +12,7 @@
 use avian3d::prelude::*;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use stochastic_collision::ecs::penalty_response;
+use stochastic_collision::ecs::{PenaltySettings, penalty_response};
 use stochastic_collision::prelude::*;
 
 /// Balls dropped on the cloth.
@@ -56,7 +56,11 @@ pub fn cloth_and_balls_app() -> App {
         bevy::transform::TransformPlugin,
         PhysicsPlugins::default(),
         StochasticCollisionPlugin::default().with_threads(2),
-        PenaltyResponsePlugin::default(),
+        // A soft cloth: each contact's whole depth is corrected in one step.
+        PenaltyResponsePlugin::default().with_settings(PenaltySettings {
+            stiffness: 1.0,
+            ..PenaltySettings::default()
+        }),
     ))
     .insert_resource(TimeUpdateStrategy::FixedTimesteps(1))
     .init_resource::<Tally>()
