@@ -3,7 +3,7 @@
 //!
 //! Every frame, each side refits its tree to the frame's positions and reports every pair of
 //! triangles more than two vertex rings apart (the tracker's default exclusion) whose distance is
-//! at most the thickness (a tenth of the mean edge length, the tracker's default):
+//! at most the thickness (`TrackerConfig::for_surface`'s, a tenth of the mean edge length):
 //! - **ours**: `CollisionMesh::set_positions` (refit) and `self_contacts_excluding` (neighbours
 //!   excluded before any test, separation filters before the exact distance);
 //! - **parry3d**: its `Bvh` over the triangles' boxes loosened by the thickness, refit as
@@ -33,11 +33,9 @@ use stochastic_collision::bvh::{
 use stochastic_collision::deform::Whirl;
 use stochastic_collision::geometry::closest_points_triangle_triangle;
 use stochastic_collision::mesh::{SelfExclusion, TriMesh, generate};
+use stochastic_collision::tracking::{TrackedSurface, TrackerConfig};
 
 mod support;
-
-/// The tracker's default exclusion (`TrackerConfig::exclusion_rings`).
-const RINGS: u32 = 2;
 
 fn meshes() -> Vec<(String, TriMesh)> {
     let mut out = vec![(
@@ -54,18 +52,6 @@ fn meshes() -> Vec<(String, TriMesh)> {
         }
     }
     out
-}
-
-fn mean_edge_length(mesh: &TriMesh) -> f32 {
-    let (mut sum, mut n) = (0.0f64, 0usize);
-    for t in 0..mesh.triangle_count() {
-        let p = mesh.triangle(t);
-        for k in 0..3 {
-            sum += p[k].distance(p[(k + 1) % 3]) as f64;
-            n += 1;
-        }
-    }
-    (sum / n.max(1) as f64) as f32
 }
 
 fn median(v: &mut [f64]) -> f64 {
@@ -154,17 +140,19 @@ fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let frames = if quick { 24 } else { 120 };
     println!(
-        "exact self pass, {frames} whirled frames (seed 1), thickness 0.1 x mean edge, \
-         {RINGS}-ring exclusion, 1 thread, median frame"
+        "exact self pass, {frames} whirled frames (seed 1), the tracker's default thickness \
+         (0.1 x mean edge) and exclusion rings, 1 thread, median frame"
     );
     println!(
         "{:<26} {:>7} {:>8} {:>10} {:>10} {:>11} {:>10} {:>12}",
         "mesh", "tris", "pairs", "ours ms", "parry ms", "ours/parry", "ours diff", "parry diff"
     );
     for (name, mesh) in meshes() {
-        let thickness = 0.1 * mean_edge_length(&mesh);
+        // The tracker's defaults for this mesh: what its exact fallback is run with.
+        let config = TrackerConfig::for_surface(&TrackedSurface::new(mesh.clone()));
+        let thickness = config.thickness;
         let whirl = Whirl::new(&mesh, frames, 1);
-        let exclusion = SelfExclusion::new(&mesh, RINGS);
+        let exclusion = SelfExclusion::new(&mesh, config.exclusion_rings);
         let mut ours_mesh = CollisionMesh::new(mesh.clone());
         let mut parry = ParryPass::new(&mesh, thickness);
         let mut ws = QueryWorkspace::new();

@@ -18,6 +18,7 @@ use stochastic_collision::geometry::{closest_points_triangle_triangle, triangles
 use stochastic_collision::mesh::{
     MeshError, SelfExclusion, Topology, TriMesh, generate, triangles_within_rings,
 };
+use stochastic_collision::tracking::TrackedSurface;
 
 fn whirled_tube(frame: usize) -> TriMesh {
     let mut tube = generate::tube(0.15, 2.0, 12, 30, false);
@@ -125,16 +126,9 @@ fn meshes() -> Vec<(&'static str, TriMesh)> {
     ]
 }
 
+/// The mean edge length, as the tracker measures it.
 fn mean_edge(mesh: &TriMesh) -> f32 {
-    let (mut s, mut n) = (0.0, 0);
-    for t in 0..mesh.triangle_count() {
-        let p = mesh.triangle(t);
-        for k in 0..3 {
-            s += p[k].distance(p[(k + 1) % 3]);
-            n += 1;
-        }
-    }
-    s / n as f32
+    TrackedSurface::new(mesh.clone()).mean_edge_length()
 }
 
 /// Every non-adjacent pair `(a, b)` with `a < b`, with its f64 distance (0 when they cross).
