@@ -80,6 +80,26 @@ tracking() { # docs/tracking.md: tracking against the exact self-collision pass
         --json "docs/tracking/held_out/$mesh-seed$seed.json" | tee -a docs/tracking/held_out/output.txt
     done
   done
+  # Held out, generated: a new random-centre-line tube and a new noisy sphere per seed
+  # (whirled), and the cloth crumpled (folded like paper) with each seed.
+  for spec in "random-tube whirl" "noisy-sphere whirl" "cloth crumple"; do
+    set -- $spec
+    for seed in 3 4 5; do
+      echo "== generated:$1 ($2) seed $seed" | tee -a docs/tracking/held_out/output.txt
+      $q --mesh "generated:$1" --motion "$2" --frames 120 --seed "$seed" --no-sweep \
+        --out-dir "target/tracking_held_out/$1-$seed" \
+        --json "docs/tracking/held_out/generated-$1-seed$seed.json" | tee -a docs/tracking/held_out/output.txt
+    done
+  done
+  # Growth with the mesh at the same budget: the 5k cloth and the 100k intestine, 2 ms a step.
+  mkdir -p docs/tracking/growth
+  : > docs/tracking/growth/output.txt
+  for mesh in plane_50x50 small_intestine_100k; do
+    echo "== $mesh, budget 2000 us" | tee -a docs/tracking/growth/output.txt
+    $q --mesh "$meshes/$mesh.obj" --frames 120 --budget-us 2000 \
+      --out-dir "target/tracking_growth/$mesh" \
+      --json "docs/tracking/growth/$mesh.json" | tee -a docs/tracking/growth/output.txt
+  done
   docs/tracking/budget.sh
 }
 

@@ -1,8 +1,8 @@
 //! What stochastic tracking costs and misses, against the exact self-collision pass.
 //!
 //! ```text
-//! cargo run --release --example tracking_quality -- [--mesh PATH] [--frames 120] [--seed S] \
-//!     [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
+//! cargo run --release --example tracking_quality -- [--mesh PATH|generated:NAME]
+//!     [--motion whirl|crumple] [--frames 120] [--seed S] [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
 //!     [--sweep a,b,c | --no-sweep] [--sampling hierarchy|uniform|velocity] [--search two-step|full]
 //! ```
 //!
@@ -10,12 +10,17 @@
 //! it adapts its new pairs per frame, starting from `--pairs-per-frame`, to what the budget
 //! allows (no sweep then unless `--sweep` is given).
 //!
-//! The mesh (default: a generated capped tube, like a stretch of gut; any OBJ with `--mesh`)
-//! is animated by a seeded [`Whirl`]: its halves wind around an axis in opposite senses until
-//! they cut through each other, then unwind, in episodes. Every frame, the exact pass
-//! ([`self_contacts_excluding`], after a refit) finds every pair of triangles closer than the thickness
-//! (a tenth of the mean edge length) that are not adjacent in the tracker's sense (within one
-//! vertex ring, `SelfExclusion`); a *contact region* is a connected set of
+//! The mesh (default: a generated capped tube, like a stretch of gut; any OBJ with `--mesh`,
+//! or a generated one: `generated:tube` (the default), `generated:random-tube` (a tube along
+//! a random centre line, seeded by `--seed`), `generated:noisy-sphere` (a spiky sphere, seeded),
+//! `generated:cloth` (a 7200-triangle sheet)) is animated by a seeded [`Whirl`] (its halves
+//! wind around an axis in opposite senses until they cut through each other, then unwind, in
+//! episodes) or with `--motion crumple` a [`Crumple`] (folded like paper, two folds at a
+//! time). Each run is labelled training or held out (`TRAINING_MESHES`, `TRAINING_SEEDS`:
+//! what the tracker's constants were chosen on). Every frame, the exact pass
+//! ([`self_contacts_excluding`], after a refit) finds every pair of triangles closer than the
+//! thickness (a tenth of the mean edge length) that are not adjacent in the tracker's sense
+//! (within its exclusion rings, 2 by default: `SelfExclusion`); a *contact region* is a connected set of
 //! them (triangles linked by a contact pair or a shared vertex), followed from frame to frame
 //! while it keeps a vertex in common with its previous shape or a contact point within two
 //! tolerances of one of its previous points (regions move); regions that merge are followed
@@ -24,7 +29,7 @@
 //! (one mean edge length) of one of the region's exact contact points, and is *false* when it
 //! hits none.
 //!
-//! JSON fields: `recall` (regions hit within 3 frames of their first appearance; regions that
+//! JSON fields: `split` (`training` or `held_out`), `motion`, `recall` (regions hit within 3 frames of their first appearance; regions that
 //! appear in the last 3 frames and are not hit yet are left out), `false_contact_rate` (contacts
 //! farther than thickness + tolerance from every exact contact point),
 //! `strict_false_contact_rate` (contacts whose triangle pair the exact pass does not report: its
@@ -38,7 +43,9 @@
 //! `regions`, `latency_frames_p95` (over the hit regions), `tracker_us_per_frame` (surface
 //! update + step), `exact_us_per_frame` (refit + exact pass), both in thread CPU time (the
 //! machine may be shared), `time_ratio`, `pairs_per_frame` (the configured one, the start under
-//! a budget), `mean_pairs_per_frame` (what the steps drew), `budget_us`,
+//! a budget), `mean_pairs_per_frame` (what the steps drew), `budget_us`, `breakdown_us`
+//! (mean wall-clock µs per frame of the surface update and of each stage of the step:
+//! candidates, sampling, local search, pruning, propagation; `StepTimes`),
 //! and the same for each `sweep` entry. Writes `frames.csv`, `sweep.csv`,
 //! `recall_vs_pairs.svg` and `time_vs_pairs.svg` to `--out-dir` (default
 //! `target/tracking_quality`). With `TRACKING_QUALITY_DEBUG=1`, each missed region is listed
@@ -56,11 +63,11 @@ use plotters::prelude::*;
 use stochastic_collision::bvh::{
     CollisionMesh, QueryWorkspace, SelfContact, self_contacts_excluding,
 };
-use stochastic_collision::deform::Whirl;
+use stochastic_collision::deform::{Animation, Crumple, Whirl};
 use stochastic_collision::geometry::closest_points_triangle_triangle;
 use stochastic_collision::mesh::{SelfExclusion, Topology, TriMesh, generate};
 use stochastic_collision::tracking::{
-    Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig,
+    Sampling, SearchMode, TRAINING_MESHES, TRAINING_SEEDS, TrackedSurface, Tracker, TrackerConfig,
 };
 
 /// CPU time of the calling thread, µs: what the work cost, whatever else runs on the machine
@@ -88,8 +95,16 @@ fn cpu_us() -> f64 {
 /// Frames within which a new region must be hit.
 const LATENCY_LIMIT: usize = 3;
 
+/// Which animation moves the mesh.
+#[derive(Clone, Copy, PartialEq)]
+enum Motion {
+    Whirl,
+    Crumple,
+}
+
 struct Settings {
     mesh: Option<PathBuf>,
+    motion: Motion,
     frames: usize,
     seed: u64,
     pairs: usize,
@@ -105,6 +120,7 @@ struct Settings {
 fn parse_args() -> Result<Settings, String> {
     let mut s = Settings {
         mesh: None,
+        motion: Motion::Whirl,
         frames: 120,
         seed: 1,
         pairs: 64,
@@ -129,6 +145,13 @@ fn parse_args() -> Result<Settings, String> {
     while let Some(flag) = it.next() {
         match flag.to_str().unwrap_or("") {
             "--mesh" => s.mesh = Some(PathBuf::from(it.next().ok_or("--mesh needs a path")?)),
+            "--motion" => {
+                s.motion = match text(it.next(), "--motion")?.as_str() {
+                    "whirl" => Motion::Whirl,
+                    "crumple" => Motion::Crumple,
+                    o => return Err(format!("unknown motion `{o}` (whirl|crumple)")),
+                }
+            }
             "--frames" => s.frames = number(it.next(), "--frames")?.max(1) as usize,
             "--seed" => s.seed = number(it.next(), "--seed")?,
             "--pairs-per-frame" => s.pairs = number(it.next(), "--pairs-per-frame")? as usize,
@@ -171,7 +194,7 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --mesh, --frames, --seed, --pairs-per-frame, --budget-us, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
+                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
                 ));
             }
         }
@@ -249,7 +272,7 @@ impl UnionFind {
 
 fn exact_truth(
     mesh: &TriMesh,
-    whirl: &Whirl,
+    whirl: &dyn Animation,
     thickness: f32,
     exclusion_rings: u32,
     continuity: f32,
@@ -273,7 +296,7 @@ fn exact_truth(
         whirl.positions(f, &mut positions);
         let t0 = cpu_us();
         cm.set_positions(&positions)
-            .expect("the whirl keeps positions finite");
+            .expect("the animation keeps positions finite");
         pairs.clear();
         // The same adjacency as the tracker's (pairs within `exclusion_rings` rings).
         self_contacts_excluding(&cm, thickness, &exclusion, &mut ws, &mut pairs)
@@ -381,16 +404,24 @@ fn exact_truth(
 }
 
 /// A uniform grid over the exact contact points of one frame.
+/// Points of one grid cell grouped by label: (label, the points' indices).
+type CellGroups = Vec<(usize, Vec<u32>)>;
+
 struct PointGrid {
     cell: f32,
-    cells: HashMap<(i32, i32, i32), Vec<u32>>,
+    /// Per cell: its points grouped by label.
+    cells: HashMap<(i32, i32, i32), CellGroups>,
 }
 
 impl PointGrid {
     fn new(points: &[(Vec3, usize)], cell: f32) -> Self {
-        let mut cells: HashMap<(i32, i32, i32), Vec<u32>> = HashMap::new();
-        for (i, (p, _)) in points.iter().enumerate() {
-            cells.entry(Self::key(*p, cell)).or_default().push(i as u32);
+        let mut cells: HashMap<(i32, i32, i32), CellGroups> = HashMap::new();
+        for (i, &(p, label)) in points.iter().enumerate() {
+            let groups = cells.entry(Self::key(p, cell)).or_default();
+            match groups.iter_mut().find(|(l, _)| *l == label) {
+                Some((_, members)) => members.push(i as u32),
+                None => groups.push((label, vec![i as u32])),
+            }
         }
         PointGrid { cell, cells }
     }
@@ -398,19 +429,26 @@ impl PointGrid {
         let q = (p / cell).floor();
         (q.x as i32, q.y as i32, q.z as i32)
     }
-    /// Labels (regions, or tracks) of the points within `cell` of `p`.
+    /// Labels (regions, or tracks) of the points within `cell` of `p`. A label found once is
+    /// not looked for again (dense contact patches hold many points of one label per cell).
     fn regions_near(&self, p: Vec3, points: &[(Vec3, usize)], out: &mut Vec<usize>) {
         out.clear();
         let (x, y, z) = Self::key(p, self.cell);
         for dx in -1..=1 {
             for dy in -1..=1 {
                 for dz in -1..=1 {
-                    if let Some(list) = self.cells.get(&(x + dx, y + dy, z + dz)) {
-                        for &i in list {
-                            let (q, r) = points[i as usize];
-                            if (q - p).length() <= self.cell && !out.contains(&r) {
-                                out.push(r);
-                            }
+                    let Some(groups) = self.cells.get(&(x + dx, y + dy, z + dz)) else {
+                        continue;
+                    };
+                    for (label, members) in groups {
+                        if out.contains(label) {
+                            continue;
+                        }
+                        if members
+                            .iter()
+                            .any(|&i| (points[i as usize].0 - p).length() <= self.cell)
+                        {
+                            out.push(*label);
                         }
                     }
                 }
@@ -451,12 +489,26 @@ struct RunResult {
     normal_error_deg: (f64, f64),
     /// Per frame: (contacts, false contacts, active pairs, µs, regions hit).
     per_frame: Vec<(usize, usize, usize, f64, usize)>,
+    /// Mean wall-clock µs per frame of each stage: the surface update
+    /// (`TrackedSurface::update_time`), then the step's `StepTimes` (candidates, sampling,
+    /// local search, pruning, propagation).
+    breakdown_us: [f64; 6],
 }
+
+/// Names of [`RunResult::breakdown_us`]'s entries.
+const STAGES: [&str; 6] = [
+    "update",
+    "candidates",
+    "sampling",
+    "local_search",
+    "pruning",
+    "propagation",
+];
 
 #[allow(clippy::too_many_arguments)]
 fn run_tracker(
     mesh: &TriMesh,
-    whirl: &Whirl,
+    whirl: &dyn Animation,
     truth: &Truth,
     config: TrackerConfig,
     tolerance: f32,
@@ -477,16 +529,28 @@ fn run_tracker(
     let mut strict_false = 0usize;
     let (mut depth_errors, mut normal_errors) = (Vec::new(), Vec::new());
     let mut exact_set: HashSet<(u32, u32)> = HashSet::new();
+    let mut breakdown = [0.0f64; 6];
     for (f, exact) in truth.frames.iter().enumerate() {
         whirl.positions(f, &mut positions);
         let t0 = cpu_us();
         surface
             .set_positions(&positions)
-            .expect("the whirl keeps positions finite");
+            .expect("the animation keeps positions finite");
         tracker.step_self(&surface);
         let us = cpu_us() - t0;
         total_us += us;
         pairs_drawn += tracker.stats().pairs_per_frame;
+        let times = tracker.stats().times;
+        for (sum, d) in breakdown.iter_mut().zip([
+            surface.update_time(),
+            times.candidates,
+            times.sampling,
+            times.local_search,
+            times.pruning,
+            times.propagation,
+        ]) {
+            *sum += d.as_secs_f64() * 1e6;
+        }
         let grid = PointGrid::new(&exact.points, radius);
         let mut false_here = 0;
         let mut hit_here = Vec::new();
@@ -633,6 +697,7 @@ fn run_tracker(
             covered_pairs as f64 / exact_pairs as f64
         },
         per_frame,
+        breakdown_us: breakdown.map(|t| t / frames.max(1) as f64),
     }
 }
 
@@ -686,7 +751,7 @@ fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32
 
 fn json_run(r: &RunResult) -> String {
     format!(
-        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"strict_false_contact_rate\": {:.4}, \"contacts\": {}, \"apart_contacts\": {}, \"depth_error_mean\": {:.3e}, \"depth_error_p95\": {:.3e}, \"normal_error_deg_mean\": {:.3e}, \"normal_error_deg_p95\": {:.3e}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}",
+        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"strict_false_contact_rate\": {:.4}, \"contacts\": {}, \"apart_contacts\": {}, \"depth_error_mean\": {:.3e}, \"depth_error_p95\": {:.3e}, \"normal_error_deg_mean\": {:.3e}, \"normal_error_deg_p95\": {:.3e}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}, \"breakdown_us\": {{{}}}",
         r.pairs_per_frame,
         r.mean_pairs,
         r.budget_us.map_or("null".to_owned(), |b| b.to_string()),
@@ -704,8 +769,19 @@ fn json_run(r: &RunResult) -> String {
         r.latency_p95,
         r.tracker_us,
         r.exact_us,
-        r.tracker_us / r.exact_us.max(1e-9)
+        r.tracker_us / r.exact_us.max(1e-9),
+        breakdown(r, |name, us| format!("\"{name}\": {us:.1}"))
     )
+}
+
+/// `r`'s per-frame breakdown, each stage written by `item`, separated by commas.
+fn breakdown(r: &RunResult, item: impl Fn(&str, f64) -> String) -> String {
+    STAGES
+        .iter()
+        .zip(r.breakdown_us)
+        .map(|(name, us)| item(name, us))
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// A labelled curve of a plot.
@@ -763,6 +839,46 @@ fn plot(
     Ok(())
 }
 
+/// Generated meshes `--mesh generated:NAME` names: a seeded shape (the run's seed) that no
+/// constant was chosen on, unless it is the training tube.
+const GENERATED: [&str; 4] = ["tube", "random-tube", "noisy-sphere", "cloth"];
+
+/// The mesh of `--mesh` (an OBJ path or `generated:NAME`; default the generated tube) and
+/// its name.
+fn load_mesh(path: Option<&std::path::Path>, seed: u64) -> Result<(String, TriMesh), String> {
+    let Some(path) = path else {
+        return load_mesh(Some(std::path::Path::new("generated:tube")), seed);
+    };
+    let text = path.to_string_lossy();
+    let Some(kind) = text.strip_prefix("generated:") else {
+        return TriMesh::from_obj(path)
+            .map(|m| (path.display().to_string(), m))
+            .map_err(|e| e.to_string());
+    };
+    let mesh = match kind {
+        "tube" => generate::tube(0.08, 2.0, 24, 160, true),
+        "random-tube" => generate::random_tube(0.06, 2.0, 24, 240, seed),
+        "noisy-sphere" => generate::noisy_sphere(1.0, 4, 0.25, seed),
+        "cloth" => generate::cloth_grid(1.0, 1.0, 60, 60),
+        other => {
+            return Err(format!(
+                "unknown generated mesh `{other}` (known: {})",
+                GENERATED.join(", ")
+            ));
+        }
+    };
+    Ok((format!("generated:{kind}"), mesh))
+}
+
+/// Whether a run is on the tracker's training data ([`TRAINING_MESHES`], [`TRAINING_SEEDS`]).
+fn is_training(name: &str, seed: u64) -> bool {
+    let stem = std::path::Path::new(name.trim_start_matches("generated:"))
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    TRAINING_SEEDS.contains(&seed) && TRAINING_MESHES.iter().any(|m| *m == stem || *m == name)
+}
+
 fn main() {
     let settings = match parse_args() {
         Ok(s) => s,
@@ -771,20 +887,27 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let (name, mesh) = match &settings.mesh {
-        Some(path) => match TriMesh::from_obj(path) {
-            Ok(m) => (path.display().to_string(), m),
-            Err(e) => {
-                eprintln!("tracking_quality: {e}");
-                std::process::exit(2);
-            }
-        },
-        None => (
-            "generated capped tube".to_string(),
-            generate::tube(0.08, 2.0, 24, 160, true),
-        ),
+    let (name, mesh) = match load_mesh(settings.mesh.as_deref(), settings.seed) {
+        Ok(named) => named,
+        Err(e) => {
+            eprintln!("tracking_quality: {e}");
+            std::process::exit(2);
+        }
     };
-    let whirl = Whirl::new(&mesh, settings.frames, settings.seed);
+    let (whirl, episodes): (Box<dyn Animation>, usize) = match settings.motion {
+        Motion::Whirl => {
+            let w = Whirl::new(&mesh, settings.frames, settings.seed);
+            let n = w.episodes().len();
+            (Box::new(w), n)
+        }
+        Motion::Crumple => {
+            let c = Crumple::new(&mesh, settings.frames, settings.seed);
+            let n = c.episodes().len();
+            (Box::new(c), n)
+        }
+    };
+    let whirl = whirl.as_ref();
+    let training = is_training(&name, settings.seed);
     let probe = TrackedSurface::new(mesh.clone());
     let mut config = TrackerConfig::for_surface(&probe);
     config.seed = settings.seed;
@@ -793,18 +916,24 @@ fn main() {
     config.search = settings.search;
     let tolerance = probe.mean_edge_length();
     println!(
-        "tracking_quality: {name}: {} triangles, {} boundary edges, {} non-manifold; {} frames, {} episode(s); thickness {:.4}, tolerance {:.4}",
+        "tracking_quality: {name} ({}): {} triangles, {} boundary edges, {} non-manifold; {} frames, {} {} episode(s); thickness {:.4}, tolerance {:.4}",
+        if training { "training" } else { "held out" },
         mesh.triangle_count(),
         Topology::new(&mesh).boundary_edge_count(),
         Topology::new(&mesh).non_manifold_edge_count(),
         settings.frames,
-        whirl.episodes().len(),
+        episodes,
+        if settings.motion == Motion::Crumple {
+            "crumple"
+        } else {
+            "whirl"
+        },
         config.thickness,
         tolerance
     );
     let truth = exact_truth(
         &mesh,
-        &whirl,
+        whirl,
         config.thickness,
         config.exclusion_rings,
         config.thickness + 2.0 * tolerance,
@@ -820,7 +949,7 @@ fn main() {
             pairs_per_frame: n,
             ..config.clone()
         };
-        results.push(run_tracker(&mesh, &whirl, &truth, cfg, tolerance));
+        results.push(run_tracker(&mesh, whirl, &truth, cfg, tolerance));
         show_progress("tracker sweep", i + 1, counts.len());
     }
     let main_run = results
@@ -863,6 +992,11 @@ fn main() {
             r.tracker_us / r.exact_us.max(1e-9)
         );
     }
+    println!(
+        "per-frame breakdown at {} pairs/f (wall-clock µs, mean): {}",
+        main_run.pairs_per_frame,
+        breakdown(&main_run, |name, us| format!("{name} {us:.0}"))
+    );
     if let Some(us) = settings.budget_us {
         println!(
             "time budget {us} µs per tracker step: {:.1} new pairs per frame on average (adapted from {})",
@@ -973,8 +1107,14 @@ fn main() {
         .map(|r| format!("{{{}}}", json_run(r)))
         .collect();
     let json = format!(
-        "{{\"mesh\": \"{}\", \"triangles\": {}, \"frames\": {}, \"seed\": {}, \"thickness\": {}, \"tolerance\": {}, {}, \"sweep\": [{}]}}\n",
+        "{{\"mesh\": \"{}\", \"split\": \"{}\", \"motion\": \"{}\", \"triangles\": {}, \"frames\": {}, \"seed\": {}, \"thickness\": {}, \"tolerance\": {}, {}, \"sweep\": [{}]}}\n",
         name.replace('\\', "\\\\").replace('"', "\\\""),
+        if training { "training" } else { "held_out" },
+        if settings.motion == Motion::Crumple {
+            "crumple"
+        } else {
+            "whirl"
+        },
         mesh.triangle_count(),
         settings.frames,
         settings.seed,

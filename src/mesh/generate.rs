@@ -18,6 +18,7 @@ use std::f32::consts::TAU;
 use glam::Vec3;
 
 use super::TriMesh;
+pub use super::random_shapes::{noisy_sphere, random_tube};
 
 /// Highest subdivision level [`icosphere`] accepts (20·4¹⁰ ≈ 21 million triangles); higher
 /// levels are lowered to it.

@@ -15,6 +15,7 @@ mod error;
 pub mod generate;
 mod mass;
 mod obj;
+mod random_shapes;
 mod rings;
 mod topology;
 mod tri_mesh;

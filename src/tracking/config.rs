@@ -1,5 +1,21 @@
 //! Parameters of a [`Tracker`](super::Tracker).
 
+/// The meshes the tracker's constants (here and in the sampler, the search and the
+/// pruning) were chosen on: `tracking_quality`'s generated capped tube
+/// (`generated:tube`) and the shared `plane_50x50`, `large-intestine-sf+-hf-` and
+/// `small_intestine_100k`, with [`TRAINING_SEEDS`]. Every other mesh and seed is held out:
+/// reports on them measure how the defaults carry over.
+pub const TRAINING_MESHES: [&str; 4] = [
+    "generated:tube",
+    "plane_50x50",
+    "large-intestine-sf+-hf-",
+    "small_intestine_100k",
+];
+
+/// The seeds (of the animation and of the tracker) the constants were chosen on, with
+/// [`TRAINING_MESHES`].
+pub const TRAINING_SEEDS: [u64; 2] = [1, 2];
+
 /// How new random feature pairs are drawn each frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Sampling {

@@ -23,8 +23,11 @@
 //! [`TrackerConfig::propagation_limit`] propagated contacts. The rest of a frame grows with
 //! the mesh: [`TrackedSurface::set_positions`] refits the whole patch tree and every
 //! triangle normal, [`Sampling::Hierarchy`] traverses every overlapping patch pair,
-//! [`Sampling::Velocity`] weighs every triangle, and self-collision's crease probes scan every
-//! edge for folds. A deadline ([`Tracker::step_self_until`]) cuts the searching, not that
+//! [`Sampling::Velocity`] weighs every triangle, and self-collision's crease probes scan the
+//! edges of every patch that may hold a fold (its normal cone, or its cone with an adjacent
+//! patch's, 45° wide or more) or a collapsed edge: all of a curved tube, only the folded
+//! parts of a sheet. [`StepStats::times`] ([`StepTimes`]) and
+//! [`TrackedSurface::update_time`] say where a frame's time went. A deadline ([`Tracker::step_self_until`]) cuts the searching, not that
 //! work. What tracking finds and misses against the exact self-collision pass with the same
 //! exclusion ([`crate::bvh::self_contacts_excluding`] with a [`crate::mesh::SelfExclusion`] of
 //! [`TrackerConfig::exclusion_rings`]) is measured by `examples/tracking_quality.rs`; on small
@@ -42,12 +45,14 @@ mod patch_tree;
 mod pruning;
 mod sampling;
 mod surface;
+mod timing;
 mod tracker;
 
 pub use crate::mesh::triangles_within_rings;
-pub use config::{Sampling, SearchMode, TrackerConfig};
+pub use config::{Sampling, SearchMode, TRAINING_MESHES, TRAINING_SEEDS, TrackerConfig};
 pub use contact::Contact;
 pub use feature::{Feature, FeatureShape, FeatureVertices, feature_distance};
 pub use pruning::PruneCounts;
 pub use surface::{DEFAULT_PATCH_SIZE, TrackedSurface};
+pub use timing::StepTimes;
 pub use tracker::{PairList, StepStats, TrackedPair, Tracker};

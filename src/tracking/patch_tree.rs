@@ -6,9 +6,29 @@ use glam::{DMat3, DVec3, Vec3};
 
 use crate::bvh::{Bvh, BvhNode};
 use crate::geometry::PoseF64;
-use crate::mesh::TriMesh;
+use crate::mesh::{Topology, TriMesh};
+
+/// An edge shorter than this fraction of its rest length is collapsed (squeezed along the
+/// surface): a crease candidate like an edge folded past 90°.
+pub(crate) const COLLAPSED_FRACTION: f32 = 0.3;
 
 const NONE: u32 = u32::MAX;
+
+/// An edge between two triangles, as a fold and collapse scan reads it.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CreaseEdge {
+    /// Topology edge index.
+    pub edge: u32,
+    /// Its first two triangles.
+    pub triangles: [u32; 2],
+    /// Its vertices.
+    pub vertices: [u32; 2],
+    /// Its rest length.
+    pub rest: f32,
+    /// `(COLLAPSED_FRACTION · rest)²`, enlarged by 1e-4 (a length below its square root may
+    /// be collapsed).
+    pub collapse_below_sq: f32,
+}
 
 /// A node of the cut tree: inner (two children) or a patch.
 #[derive(Debug, Clone, Copy)]
@@ -34,6 +54,15 @@ pub(crate) struct Patch {
     /// one of its neighbours), itself excluded, ascending. Pairs of these are skipped by the
     /// hierarchy sampler: random pairs there mostly slide along the sheet towards each other.
     pub near: Vec<u32>,
+    /// Patches sharing a vertex with this one, itself excluded, ascending.
+    pub adjacent: Vec<u32>,
+    /// Edges between two triangles whose first triangle is in this patch, by first triangle
+    /// (from [`PatchTree::assign_edges`]): the edges a fold or crease scan of this patch
+    /// looks at.
+    pub edges: Vec<CreaseEdge>,
+    /// Whether one of the patch's triangles has an edge shorter than
+    /// [`COLLAPSED_FRACTION`] of its rest length, from [`PatchTree::update_cones`].
+    pub collapsed: bool,
     /// Current box.
     pub min: Vec3,
     /// Current box.
@@ -109,6 +138,9 @@ impl PatchTree {
                     triangles,
                     vertices,
                     near: Vec::new(),
+                    adjacent: Vec::new(),
+                    edges: Vec::new(),
+                    collapsed: false,
                     min: n.min,
                     max: n.max,
                     cone_axis: Vec3::Y,
@@ -159,6 +191,9 @@ impl PatchTree {
             near.dedup();
             tree.patches[p].near = near;
         }
+        for (p, nb) in neighbours.into_iter().enumerate() {
+            tree.patches[p].adjacent = nb;
+        }
         tree.bvh = bvh;
         tree.refit(mesh);
         tree
@@ -190,9 +225,60 @@ impl PatchTree {
         }
     }
 
-    /// Recomputes every patch's normal cone from the triangles' unit normals (`O(triangles)`).
-    pub fn update_cones(&mut self, triangle_normals: &[Vec3]) {
+    /// Gives every edge between two triangles to the patch of its first triangle
+    /// ([`Patch::edges`]), with its rest length from `rest_lengths` (per topology edge).
+    pub fn assign_edges(&mut self, topology: &Topology, rest_lengths: &[f32]) {
         for patch in &mut self.patches {
+            patch.edges.clear();
+        }
+        for (e, edge) in topology.edges().iter().enumerate() {
+            if let [t0, t1, ..] = edge.triangles[..] {
+                let p = self.patch_of[t0 as usize] as usize;
+                let rest = rest_lengths[e];
+                let limit = COLLAPSED_FRACTION * rest;
+                self.patches[p].edges.push(CreaseEdge {
+                    edge: e as u32,
+                    triangles: [t0, t1],
+                    vertices: edge.vertices,
+                    rest,
+                    collapse_below_sq: limit * limit * (1.0 + 1e-4),
+                });
+            }
+        }
+        for patch in &mut self.patches {
+            patch.edges.sort_unstable_by_key(|c| (c.triangles, c.edge));
+        }
+    }
+
+    /// Whether patch `p` may hold a folded edge (its two triangles' normals more than 90°
+    /// apart) or a collapsed one: the patch is [`Patch::collapsed`], or its normal cone
+    /// together with its own or an adjacent patch's is 45° wide or more (two normals in
+    /// cones of half-angles θa and θb whose axes are φ apart are at most θa + θb + φ apart,
+    /// so a fold across an edge of the patch needs θa + θb + φ ≥ 90°). Conservative by a
+    /// small slack; [`PatchTree::update_cones`] must be current.
+    pub fn may_crease(&self, p: u32) -> bool {
+        const SLACK: f32 = 1e-3;
+        let pa = &self.patches[p as usize];
+        if pa.collapsed {
+            return true;
+        }
+        let wide = |pb: &Patch| {
+            // cos(θa + θb) ≤ 0, or cos φ ≤ sin(θa + θb).
+            let cos_sum = pa.cone_cos * pb.cone_cos - pa.cone_sin * pb.cone_sin;
+            let sin_sum = pa.cone_sin * pb.cone_cos + pa.cone_cos * pb.cone_sin;
+            cos_sum <= SLACK || pa.cone_axis.dot(pb.cone_axis) <= sin_sum + SLACK
+        };
+        wide(pa) || pa.adjacent.iter().any(|&q| wide(&self.patches[q as usize]))
+    }
+
+    /// Recomputes every patch's normal cone from the triangles' unit normals, and its
+    /// [`Patch::collapsed`] flag from the triangles' (`O(triangles)`).
+    pub fn update_cones(&mut self, triangle_normals: &[Vec3], collapsed_triangles: &[bool]) {
+        for patch in &mut self.patches {
+            patch.collapsed = patch
+                .triangles
+                .iter()
+                .any(|&t| collapsed_triangles[t as usize]);
             let normals = patch
                 .triangles
                 .iter()
@@ -454,7 +540,7 @@ mod tests {
         // A closed torus: no two non-adjacent patches of the rest shape overlap much, but
         // far-apart patches never appear as overlapping without their boxes touching.
         let (mut stack, mut out) = (Vec::new(), Vec::new());
-        tree.update_cones(&normals_of(&mesh));
+        tree.update_cones(&normals_of(&mesh), &vec![false; mesh.triangle_count()]);
         tree.self_overlaps(0.0, &mut stack, &mut out);
         for &(a, b) in &out {
             let (pa, pb) = (&tree.patches[a as usize], &tree.patches[b as usize]);
@@ -464,7 +550,7 @@ mod tests {
         // A flat sheet never folds; one folded in half does, where it folds.
         let sheet = generate::cloth_grid(1.0, 1.0, 16, 16);
         let mut tree = PatchTree::new(&sheet, 16);
-        tree.update_cones(&normals_of(&sheet));
+        tree.update_cones(&normals_of(&sheet), &vec![false; sheet.triangle_count()]);
         assert!(tree.patches.iter().all(|p| p.cone_cos > 1.0 - 1e-6));
         out.clear();
         tree.self_overlaps(0.0, &mut stack, &mut out);
@@ -485,7 +571,7 @@ mod tests {
             .collect();
         let moved = TriMesh::new(folded, sheet.triangles().to_vec()).unwrap();
         tree.refit(&moved);
-        tree.update_cones(&normals_of(&moved));
+        tree.update_cones(&normals_of(&moved), &vec![false; moved.triangle_count()]);
         out.clear();
         tree.self_overlaps(0.02, &mut stack, &mut out);
         // The folded half lies over the flat one (far pairs), and the patches at the crease

@@ -5,7 +5,7 @@ use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::config::Sampling;
-use super::patch_tree::{box_transform, random_leaf_pair};
+use super::patch_tree::{COLLAPSED_FRACTION, box_transform, random_leaf_pair};
 use super::surface::{Placed, TrackedSurface};
 use crate::geometry::closest_points_triangle_triangle;
 use crate::mesh::{adjacent, triangles_within_rings};
@@ -18,7 +18,7 @@ pub(crate) struct SamplerScratch {
     overlaps: Vec<(u32, u32)>,
     covered: std::collections::HashSet<(u32, u32)>,
     known_triangles: std::collections::HashSet<u32>,
-    near_known: Vec<bool>,
+    near_known: Vec<u32>,
     /// Crease probe candidates: (sharpness key, edge, collapsed rather than folded).
     sharp: Vec<(f32, u32, bool)>,
     ring: Vec<u32>,
@@ -28,6 +28,9 @@ pub(crate) struct SamplerScratch {
     cdf_b: Vec<f64>,
     /// Overlapping patch pairs found this frame.
     pub overlap_count: usize,
+    /// Time spent this frame finding candidates (patch overlaps, covered patch pairs, sharp
+    /// edges); the rest of [`draw`] is sampling.
+    pub candidates_time: std::time::Duration,
 }
 
 /// Fraction of hierarchy-driven samples drawn uniformly instead (contacts between adjacent
@@ -36,10 +39,6 @@ const UNIFORM_SHARE: f64 = 0.25;
 
 /// One sample in this many is spent on a crease probe (self-collision).
 const CREASE_SHARE: usize = 4;
-
-/// Edges shorter than this fraction of their rest length are collapsed: crease probe
-/// candidates, like edges folded past 90°.
-const COLLAPSED: f32 = 0.3;
 
 /// Crease probes go to random edges among this many times as many of the sharpest.
 const PROBE_POOL: usize = 4;
@@ -67,6 +66,7 @@ pub(crate) fn draw(
     out: &mut Vec<(u32, u32)>,
 ) {
     scratch.overlap_count = 0;
+    scratch.candidates_time = std::time::Duration::ZERO;
     if n == 0 {
         return;
     }
@@ -94,6 +94,7 @@ pub(crate) fn draw(
             }
         }
         Sampling::Hierarchy => {
+            let started = std::time::Instant::now();
             scratch.overlaps.clear();
             if self_mode {
                 a.surface
@@ -133,6 +134,7 @@ pub(crate) fn draw(
             } else {
                 0
             };
+            scratch.candidates_time = started.elapsed();
             uniform(uniform_n, a, b, self_mode, rng, out);
             if scratch.overlaps.is_empty() {
                 // No two non-adjacent patches (or, for two meshes, no two patches at all)
@@ -248,45 +250,22 @@ fn crease_probes(
     scratch: &mut SamplerScratch,
     out: &mut Vec<(u32, u32)>,
 ) -> usize {
+    let scan_started = std::time::Instant::now();
     let topo = a.topology();
     let normals = &a.surface.normals;
     // Vertices within a ring of a known contact: creases there are being followed.
     scratch.near_known.clear();
-    scratch.near_known.resize(topo.vertex_count(), false);
     for &t in &scratch.known_triangles {
         for v in a.corners(t) {
-            scratch.near_known[v as usize] = true;
-            for &w in topo.vertex_neighbours(v) {
-                scratch.near_known[w as usize] = true;
-            }
+            scratch.near_known.push(v);
+            scratch
+                .near_known
+                .extend_from_slice(topo.vertex_neighbours(v));
         }
     }
-    scratch.sharp.clear();
-    for (e, edge) in topo.edges().iter().enumerate() {
-        if let [t0, t1, ..] = edge.triangles[..] {
-            let [v0, v1] = edge.vertices;
-            // Folded: the normals' cosine. Collapsed (squeezed along the surface): the
-            // remaining fraction of the rest length, mapped to [-1, 0) below `COLLAPSED`.
-            let fold = if normals[t0 as usize] != Vec3::ZERO && normals[t1 as usize] != Vec3::ZERO {
-                normals[t0 as usize].dot(normals[t1 as usize])
-            } else {
-                1.0
-            };
-            let rest = a.surface.rest_edge_lengths[e];
-            let now = (a.surface.mesh().positions()[v0 as usize]
-                - a.surface.mesh().positions()[v1 as usize])
-                .length();
-            let collapse = if rest > 0.0 {
-                now / rest / COLLAPSED - 1.0
-            } else {
-                1.0
-            };
-            let c = fold.min(collapse);
-            if c < 0.0 && !scratch.near_known[v0 as usize] && !scratch.near_known[v1 as usize] {
-                scratch.sharp.push((c, e as u32, collapse < fold));
-            }
-        }
-    }
+    scratch.near_known.sort_unstable();
+    scratch.near_known.dedup();
+    sharp_edges(a.surface, &scratch.near_known, false, &mut scratch.sharp);
     // `count` edges drawn at random among the `PROBE_POOL · count` sharpest.
     let sharpest =
         |x: &(f32, u32, bool), y: &(f32, u32, bool)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
@@ -301,6 +280,7 @@ fn crease_probes(
         scratch.sharp.swap(i, j);
     }
     scratch.sharp.truncate(count);
+    scratch.candidates_time += scan_started.elapsed();
     let h = thickness.max(0.0) as f64;
     let probes = scratch.sharp.len();
     for i in 0..probes {
@@ -355,6 +335,58 @@ fn crease_probes(
     probes
 }
 
+/// The folded edges (dihedral fold past 90°: the normals' cosine below 0) and collapsed
+/// ones (shorter than [`COLLAPSED_FRACTION`] of their rest length) of `surface` with no
+/// vertex in `near_known` (sorted), as (sharpness below 0: the normals' cosine, or the
+/// remaining fraction of the rest length mapped to [-1, 0); edge; collapsed rather than
+/// folded), written to `out` in no particular order. Only the edges of patches that
+/// [may crease](super::patch_tree::PatchTree::may_crease) are looked at, unless
+/// `every_edge`: the same set, at a cost that follows the folded part of the surface.
+pub(crate) fn sharp_edges(
+    surface: &TrackedSurface,
+    near_known: &[u32],
+    every_edge: bool,
+    out: &mut Vec<(f32, u32, bool)>,
+) {
+    out.clear();
+    let normals = &surface.normals;
+    let positions = surface.mesh().positions();
+    let tree = &surface.patches;
+    for (p, patch) in tree.patches.iter().enumerate() {
+        if !every_edge && !tree.may_crease(p as u32) {
+            continue;
+        }
+        for c in &patch.edges {
+            let [t0, t1] = c.triangles;
+            let [v0, v1] = c.vertices;
+            let (n0, n1) = (normals[t0 as usize], normals[t1 as usize]);
+            // A zero normal (degenerate triangle) folds nothing.
+            let fold = if n0 != Vec3::ZERO && n1 != Vec3::ZERO {
+                n0.dot(n1)
+            } else {
+                1.0
+            };
+            let d = positions[v0 as usize] - positions[v1 as usize];
+            let maybe_collapsed = d.length_squared() < c.collapse_below_sq;
+            if fold >= 0.0 && !maybe_collapsed {
+                continue;
+            }
+            let collapse = if maybe_collapsed && c.rest > 0.0 {
+                d.length() / c.rest / COLLAPSED_FRACTION - 1.0
+            } else {
+                1.0
+            };
+            let sharpness = fold.min(collapse);
+            if sharpness < 0.0
+                && near_known.binary_search(&v0).is_err()
+                && near_known.binary_search(&v1).is_err()
+            {
+                out.push((sharpness, c.edge, collapse < fold));
+            }
+        }
+    }
+}
+
 fn uniform(
     n: usize,
     a: &Placed,
@@ -399,4 +431,99 @@ fn pick(cdf: &[f64], u: f64) -> u32 {
         return ((u * cdf.len() as f64) as usize).min(cdf.len().saturating_sub(1)) as u32;
     }
     cdf.partition_point(|&c| c <= u * total).min(cdf.len() - 1) as u32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::deform::Whirl;
+    use crate::mesh::{TriMesh, generate};
+    use glam::Vec3;
+
+    fn sorted(mut v: Vec<(f32, u32, bool)>) -> Vec<(u32, bool, u32)> {
+        let mut out: Vec<_> = v.drain(..).map(|(c, e, k)| (e, k, c.to_bits())).collect();
+        out.sort_unstable();
+        out
+    }
+
+    /// Scanning only the patches that may crease finds every folded and collapsed edge that
+    /// a scan of every edge finds, with the same sharpness: on a whirled tube (frames that
+    /// cut through themselves), a cloth folded flat onto itself, and a cloth squeezed in a
+    /// band (collapsed edges, no fold), with and without known-contact vertices left out.
+    #[test]
+    fn the_patch_restricted_scan_finds_every_sharp_edge() {
+        let tube = generate::tube(0.08, 2.0, 24, 160, true);
+        let cloth = generate::cloth_grid(1.0, 1.0, 40, 40);
+        let mut cases: Vec<(TriMesh, Vec<Vec3>)> = Vec::new();
+        let whirl = Whirl::new(&tube, 60, 2);
+        for f in [0, 10, 20, 30, 45] {
+            let mut p = Vec::new();
+            whirl.positions(f, &mut p);
+            cases.push((tube.clone(), p));
+        }
+        let folded = cloth
+            .positions()
+            .iter()
+            .map(|p| {
+                if p.x > 0.1 {
+                    Vec3::new(0.2 - p.x, 0.01, p.z)
+                } else {
+                    *p
+                }
+            })
+            .collect();
+        cases.push((cloth.clone(), folded));
+        let squeezed = cloth
+            .positions()
+            .iter()
+            .map(|p| {
+                let x = if p.x.abs() < 0.1 {
+                    0.1 * p.x
+                } else {
+                    p.x - 0.09 * p.x.signum()
+                };
+                Vec3::new(x, p.y, p.z)
+            })
+            .collect();
+        cases.push((cloth.clone(), squeezed));
+        cases.push((cloth.clone(), cloth.positions().to_vec()));
+        let mut found_any = [false; 2];
+        for (k, (mesh, positions)) in cases.into_iter().enumerate() {
+            let mut surface = TrackedSurface::new(mesh);
+            surface.set_positions(&positions).unwrap();
+            let (mut every, mut restricted) = (Vec::new(), Vec::new());
+            for near_known in [vec![], (0..200).collect::<Vec<u32>>()] {
+                sharp_edges(&surface, &near_known, true, &mut every);
+                sharp_edges(&surface, &near_known, false, &mut restricted);
+                for &(_, _, collapsed) in &every {
+                    found_any[collapsed as usize] = true;
+                }
+                assert_eq!(
+                    sorted(restricted.clone()),
+                    sorted(every.clone()),
+                    "case {k}"
+                );
+            }
+            let tree = &surface.patches;
+            let scanned = (0..tree.patches.len() as u32)
+                .filter(|&p| tree.may_crease(p))
+                .count();
+            if k == 5 {
+                assert!(
+                    scanned < tree.patches.len() / 2,
+                    "the folded cloth's flat parts are skipped"
+                );
+            }
+            if k == 7 {
+                assert!(
+                    every.is_empty() && scanned == 0,
+                    "a flat sheet is not scanned"
+                );
+            }
+        }
+        assert!(
+            found_any[0] && found_any[1],
+            "folds and collapses were both seen"
+        );
+    }
 }

@@ -15,6 +15,7 @@ use super::local_search::{Located, SearchCounters, Searcher};
 use super::pruning::{PruneCounts, PruneScratch, prune};
 use super::sampling::{SamplerScratch, draw};
 use super::surface::{Placed, TrackedSurface};
+use super::timing::{Lap, StepTimes};
 use crate::geometry::{ClosestPoints, Pose};
 
 /// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
@@ -89,6 +90,8 @@ pub struct StepStats {
     pub cut: bool,
     /// Kept pairs re-measured without a local search because the deadline had passed.
     pub remeasured: usize,
+    /// Where the step's time went.
+    pub times: StepTimes,
 }
 
 /// Stochastic closest-feature tracking (Raghupathi et al., Guy and Debunne, Kimmerle et al.)
@@ -320,6 +323,7 @@ impl Tracker {
         pairs_per_frame: usize,
     ) {
         let passed = || deadline.is_some_and(|d| Instant::now() >= d);
+        let mut lap = Lap::start();
         let cfg = &self.config;
         let mean_edge = a
             .surface
@@ -372,6 +376,9 @@ impl Tracker {
         );
         stats.sampled = s.starts.len();
         stats.patch_overlaps = s.sampler.overlap_count;
+        let drawing = lap.lap();
+        stats.times.candidates = s.sampler.candidates_time.min(drawing);
+        stats.times.sampling = drawing - stats.times.candidates;
 
         // 2. Local search from every kept and new pair.
         let mut counters = SearchCounters::default();
@@ -413,6 +420,7 @@ impl Tracker {
         }
         stats.iterations = counters.iterations;
         stats.evaluations = counters.evaluations;
+        stats.times.local_search = lap.lap();
 
         // 3. Prune.
         prune(
@@ -431,6 +439,7 @@ impl Tracker {
         self.pairs.clear();
         self.pairs.extend(s.pairs.iter().copied());
         stats.active = self.pairs.len();
+        stats.times.pruning = lap.lap();
 
         // 4. Contacts, then collision propagation around them.
         self.contacts.clear();
@@ -499,6 +508,7 @@ impl Tracker {
         stats.evaluations = counters.evaluations;
         stats.contacts = self.contacts.len();
         stats.propagated = added;
+        stats.times.propagation = lap.lap();
         self.stats = stats;
     }
 }

@@ -1,14 +1,4 @@
-//! Benchmark deformations that bring distant parts of any mesh into contact and apart again.
-//!
-//! [`Whirl`] turns every vertex about an axis through the mesh's centre by an angle
-//! proportional to its signed distance from that centre along the mesh's longest extent: the
-//! two halves wind around the axis in opposite senses, and once the angle at the ends passes a
-//! quarter turn they cut through each other. The animation runs in episodes: in each, a
-//! seeded choice of axes, centre offset and largest angle; the angle grows from zero and
-//! returns to zero, so contact regions appear, move and vanish on every input, closed or open,
-//! flat (a cloth), tubular or convoluted.
-//!
-//! Next: [`crate::tracking`], which these deformations exercise (`examples/tracking_quality.rs`).
+//! The whirl: two halves of a mesh winding around an axis in opposite senses.
 
 use std::f32::consts::PI;
 
@@ -16,6 +6,7 @@ use glam::{Quat, Vec3};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
+use super::{Animation, axes_by_extent, episode_at, episode_count};
 use crate::mesh::TriMesh;
 
 /// One episode of a [`Whirl`].
@@ -55,20 +46,15 @@ pub struct Whirl {
     episodes: Vec<WhirlEpisode>,
 }
 
-/// Frames per episode (at least).
-const EPISODE_FRAMES: usize = 40;
-
 impl Whirl {
     /// The animation of `mesh` over `frames` frames: `max(1, frames / 40)` episodes.
     pub fn new(mesh: &TriMesh, frames: usize, seed: u64) -> Self {
         let frames = frames.max(1);
         let bbox = mesh.aabb();
-        let ext = bbox.extents();
-        let mut order = [0usize, 1, 2];
-        order.sort_by(|&i, &j| ext[j].total_cmp(&ext[i]).then(i.cmp(&j)));
+        let (order, ext) = axes_by_extent(mesh);
         let unit = |i: usize| Vec3::AXES[i];
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0xD1CE);
-        let count = (frames / EPISODE_FRAMES).max(1);
+        let count = episode_count(frames);
         let episodes = (0..count)
             .map(|e| {
                 // Alternate between the longest and the second-longest extent; the rotation
@@ -109,12 +95,9 @@ impl Whirl {
 
     /// The episode of `frame` and the turn `k` at that frame.
     pub fn turn(&self, frame: usize) -> (&WhirlEpisode, f32) {
-        let n = self.episodes.len();
-        let per = self.frames as f32 / n as f32;
-        let e = ((frame as f32 / per) as usize).min(n - 1);
-        let tau = (frame as f32 - e as f32 * per) / per;
+        let (e, envelope) = episode_at(self.frames, self.episodes.len(), frame);
         let ep = &self.episodes[e];
-        (ep, ep.max_turn * (PI * tau).sin().powi(2))
+        (ep, ep.max_turn * envelope)
     }
 
     /// Vertex positions at `frame` (0-based; frames past the end repeat the last episode's
@@ -131,5 +114,15 @@ impl Whirl {
                 ep.centre + Quat::from_axis_angle(ep.axis, k * s) * d
             }
         }));
+    }
+}
+
+impl Animation for Whirl {
+    fn frames(&self) -> usize {
+        Whirl::frames(self)
+    }
+
+    fn positions(&self, frame: usize, out: &mut Vec<Vec3>) {
+        Whirl::positions(self, frame, out)
     }
 }
