@@ -22,6 +22,7 @@ mod tri_mesh;
 
 pub use error::MeshError;
 pub use mass::{MassModel, MassProperties};
+pub(crate) use rings::{RingWalk, VertexList};
 pub use rings::{SelfExclusion, adjacent, triangles_within_rings};
 pub use topology::{Edge, Topology};
 pub use tri_mesh::TriMesh;

@@ -11,6 +11,53 @@ pub fn adjacent(a: [u32; 3], b: [u32; 3]) -> bool {
     a.iter().any(|v| b.contains(v))
 }
 
+/// A list of vertex indices, in place up to 64.
+pub(crate) type VertexList = SmallVec<[u32; 64]>;
+
+/// The vertices within a number of edge steps of some seed vertices, by a breadth-first walk
+/// over [`Topology::vertex_neighbours`] whose buffers are reused from call to call.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct RingWalk {
+    frontier: VertexList,
+    next: VertexList,
+}
+
+impl RingWalk {
+    /// Writes to `out` the distinct vertices at most `rings` edge steps from one of `seeds`:
+    /// the seeds first (once each), then ring by ring (not sorted).
+    pub fn collect(
+        &mut self,
+        topology: &Topology,
+        seeds: &[u32],
+        rings: u32,
+        out: &mut VertexList,
+    ) {
+        out.clear();
+        self.frontier.clear();
+        for &v in seeds {
+            if !out.contains(&v) {
+                out.push(v);
+                self.frontier.push(v);
+            }
+        }
+        for _ in 0..rings {
+            self.next.clear();
+            for &u in &self.frontier {
+                for &w in topology.vertex_neighbours(u) {
+                    if !out.contains(&w) {
+                        out.push(w);
+                        self.next.push(w);
+                    }
+                }
+            }
+            if self.next.is_empty() {
+                break;
+            }
+            std::mem::swap(&mut self.frontier, &mut self.next);
+        }
+    }
+}
+
 /// Whether triangles `a` and `b` of a mesh with `topology` are within `rings` edge steps of
 /// each other: with 0 they share a vertex; with 1 they share a vertex or an edge joins a
 /// vertex of one to a vertex of the other; and so on. Self-collision excludes such pairs.
@@ -46,24 +93,10 @@ pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rin
             })
         }
         _ => {
-            let mut seen: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
-            let mut frontier: SmallVec<[u32; 64]> = SmallVec::from_slice(&a);
-            for _ in 0..rings {
-                let mut next: SmallVec<[u32; 64]> = SmallVec::new();
-                for &v in &frontier {
-                    for &w in topology.vertex_neighbours(v) {
-                        if b.contains(&w) {
-                            return true;
-                        }
-                        if !seen.contains(&w) {
-                            seen.push(w);
-                            next.push(w);
-                        }
-                    }
-                }
-                frontier = next;
-            }
-            false
+            // Some vertex of `b` within `rings` steps of `a`'s corners.
+            let mut near = VertexList::new();
+            RingWalk::default().collect(topology, &a, rings, &mut near);
+            b.iter().any(|v| near.contains(v))
         }
     }
 }
@@ -173,30 +206,10 @@ impl Neighbourhoods {
             long: Vec::new(),
         };
         out.long_offsets.push(0);
-        let mut seen: Vec<u32> = Vec::new();
-        let mut frontier: Vec<u32> = Vec::new();
-        let mut next: Vec<u32> = Vec::new();
+        let mut seen = VertexList::new();
+        let mut walk = RingWalk::default();
         for corners in mesh.triangles() {
-            seen.clear();
-            frontier.clear();
-            for &v in corners {
-                if !seen.contains(&v) {
-                    seen.push(v);
-                    frontier.push(v);
-                }
-            }
-            for _ in 0..k {
-                next.clear();
-                for &u in &frontier {
-                    for &w in topology.vertex_neighbours(u) {
-                        if !seen.contains(&w) {
-                            seen.push(w);
-                            next.push(w);
-                        }
-                    }
-                }
-                std::mem::swap(&mut frontier, &mut next);
-            }
+            walk.collect(topology, corners, k, &mut seen);
             seen.sort_unstable();
             let mut list = ShortList {
                 len: u32::MAX,

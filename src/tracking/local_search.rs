@@ -4,6 +4,7 @@
 use glam::DVec3;
 use smallvec::SmallVec;
 
+use super::boxes::{box_gap, triangle_box};
 use super::config::SearchMode;
 use super::feature::{Feature, reduce_to_feature};
 use super::surface::Placed;
@@ -25,16 +26,6 @@ pub(crate) struct Located {
 pub(crate) struct SearchCounters {
     pub iterations: u64,
     pub evaluations: u64,
-}
-
-fn bounds(t: &[DVec3; 3]) -> (DVec3, DVec3) {
-    (t[0].min(t[1]).min(t[2]), t[0].max(t[1]).max(t[2]))
-}
-
-/// A lower bound of the distance of two triangles: the gap of their boxes.
-#[inline]
-fn box_gap(a: &(DVec3, DVec3), b: &(DVec3, DVec3)) -> f64 {
-    (a.0 - b.1).max(b.0 - a.1).max(DVec3::ZERO).length()
 }
 
 pub(crate) struct Searcher<'a> {
@@ -196,7 +187,8 @@ impl Searcher<'_> {
         for (x, y) in candidates {
             // Bounds first (cheap): nothing at or beyond `best_d` matters, excluded or not.
             let (a, b) = (self.a.triangle(x), self.b.triangle(y));
-            let mut gap = box_gap(&bounds(&a), &bounds(&b));
+            // A lower bound of the distance of two triangles: the gap of their boxes.
+            let mut gap = box_gap(&triangle_box(&a), &triangle_box(&b));
             if gap < best_d && dir != DVec3::ZERO {
                 let max_a = a
                     .iter()

@@ -37,6 +37,7 @@
 //! plugin runs a tracker for every pair and self-colliding mesh with
 //! [`Fidelity::Tracking`](crate::ecs::Fidelity::Tracking).
 
+mod boxes;
 mod config;
 mod contact;
 mod feature;

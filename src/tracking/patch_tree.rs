@@ -4,6 +4,7 @@
 
 use glam::{DMat3, DVec3, Vec3};
 
+use super::boxes::boxes_meet;
 use crate::bvh::{Bvh, BvhNode};
 use crate::geometry::PoseF64;
 use crate::mesh::{Topology, TriMesh};
@@ -328,9 +329,7 @@ impl PatchTree {
         stack: &mut Vec<(u32, u32)>,
         out: &mut Vec<(u32, u32)>,
     ) {
-        let overlap = |a: &Node, b: &Node| {
-            (a.min - margin).cmple(b.max).all() && b.min.cmple(a.max + margin).all()
-        };
+        let overlap = |a: &Node, b: &Node| boxes_meet(a.min, a.max, b.min, b.max, margin);
         stack.clear();
         stack.push((0, 0));
         while let Some((i, j)) = stack.pop() {
@@ -381,7 +380,7 @@ impl PatchTree {
         let xf = box_transform(rel);
         let overlap = |a: &Node, b: &Node| {
             let (lo, hi) = placed_box_of(b.min, b.max, Some(&xf));
-            (a.min - margin).cmple(hi).all() && lo.cmple(a.max + margin).all()
+            boxes_meet(a.min, a.max, lo, hi, margin)
         };
         stack.clear();
         if overlap(&self.nodes[0], &other.nodes[0]) {
@@ -452,7 +451,7 @@ pub(crate) fn random_leaf_pair(
     let (na, nb) = (ta.nodes(), tb.nodes());
     let meets = |x: &BvhNode, y: &BvhNode| {
         let (lo, hi) = placed_box_of(y.min, y.max, rel);
-        (x.min - margin).cmple(hi).all() && lo.cmple(x.max + margin).all()
+        boxes_meet(x.min, x.max, lo, hi, margin)
     };
     loop {
         let (x, y) = (&na[a as usize], &nb[b as usize]);

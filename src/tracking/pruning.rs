@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use smallvec::SmallVec;
 
 use super::TrackedPair;
-use crate::mesh::Topology;
+use crate::mesh::{RingWalk, Topology, VertexList};
 
 /// Why pairs were dropped in one frame.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
@@ -32,53 +32,55 @@ pub(crate) struct PruneScratch {
     claims: HashMap<u32, SmallVec<[u32; 4]>>,
     /// Per kept pair: the vertices within the rings of its second feature.
     rings: Vec<Ring>,
-    frontier: Vec<u32>,
-    next: Vec<u32>,
+    walk: RingWalk,
+    found: VertexList,
 }
 
 /// Vertices within `rings` edge steps of `v`, ascending.
-fn ring(
-    topology: &Topology,
-    v: u32,
-    rings: u32,
-    scratch: &mut PruneScratch,
-) -> SmallVec<[u32; 40]> {
-    let mut set: SmallVec<[u32; 40]> = SmallVec::new();
-    set.push(v);
-    scratch.frontier.clear();
-    scratch.frontier.push(v);
-    for _ in 0..rings {
-        scratch.next.clear();
-        for &u in &scratch.frontier {
-            for &w in topology.vertex_neighbours(u) {
-                if !set.contains(&w) {
-                    set.push(w);
-                    scratch.next.push(w);
-                }
-            }
-        }
-        std::mem::swap(&mut scratch.frontier, &mut scratch.next);
-    }
+fn ring(topology: &Topology, v: u32, rings: u32, scratch: &mut PruneScratch) -> Ring {
+    scratch
+        .walk
+        .collect(topology, &[v], rings, &mut scratch.found);
+    let mut set = Ring::from_slice(&scratch.found);
     set.sort_unstable();
     set
 }
 
+/// The thresholds of [`prune`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PruneSettings {
+    /// One mesh against itself: `(x, y)` and `(y, x)` are the same contact.
+    pub self_mode: bool,
+    /// Guy and Debunne's `k`.
+    pub far_factor: f32,
+    /// Guy and Debunne's `ε`, absolute.
+    pub far_epsilon: f64,
+    /// Pairs within it are never far.
+    pub thickness: f32,
+    /// Pairs within this many rings of a closer pair on both sides are redundant.
+    pub redundancy_rings: u32,
+    /// Largest number of pairs kept.
+    pub max_pairs: usize,
+}
+
 /// Prunes `pairs` (already searched) in place; keeps them sorted by distance (ties by
 /// features), so the outcome does not depend on the order pairs were found in.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn prune(
     pairs: &mut Vec<TrackedPair>,
     topo_a: &Topology,
     topo_b: &Topology,
-    self_mode: bool,
-    far_factor: f32,
-    far_epsilon: f64,
-    thickness: f32,
-    redundancy_rings: u32,
-    max_pairs: usize,
+    settings: &PruneSettings,
     scratch: &mut PruneScratch,
     counts: &mut PruneCounts,
 ) {
+    let PruneSettings {
+        self_mode,
+        far_factor,
+        far_epsilon,
+        thickness,
+        redundancy_rings,
+        max_pairs,
+    } = *settings;
     pairs.sort_by(|x, y| {
         x.distance
             .total_cmp(&y.distance)

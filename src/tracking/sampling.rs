@@ -4,11 +4,12 @@
 use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
 
+use super::boxes::{Box64, box_axis_gap, box_gap, triangle_box};
 use super::config::Sampling;
 use super::patch_tree::{COLLAPSED_FRACTION, box_transform, random_leaf_pair};
 use super::surface::{Placed, TrackedSurface};
 use crate::geometry::closest_points_triangle_triangle;
-use crate::mesh::{adjacent, triangles_within_rings};
+use crate::mesh::{RingWalk, VertexList, adjacent, triangles_within_rings};
 use glam::Vec3;
 
 /// Scratch memory of the samplers, reused across frames.
@@ -21,9 +22,10 @@ pub(crate) struct SamplerScratch {
     near_known: Vec<u32>,
     /// Crease probe candidates: (sharpness key, edge, collapsed rather than folded).
     sharp: Vec<(f32, u32, bool)>,
-    ring: Vec<u32>,
+    walk: RingWalk,
+    ring: VertexList,
     local: Vec<u32>,
-    boxes: Vec<([glam::DVec3; 3], glam::DVec3, glam::DVec3)>,
+    boxes: Vec<([glam::DVec3; 3], Box64)>,
     cdf_a: Vec<f64>,
     cdf_b: Vec<f64>,
     /// Overlapping patch pairs found this frame.
@@ -50,21 +52,42 @@ const CREASE_COS: f32 = -0.5;
 /// subtrees are apart at a finer level), and then another pair is drawn.
 const DESCENT_TRIES: usize = 8;
 
-#[allow(clippy::too_many_arguments)]
+/// What one frame's [`draw`] is asked for.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct DrawRequest {
+    /// Where new pairs come from.
+    pub sampling: Sampling,
+    /// How many new pairs to draw.
+    pub count: usize,
+    /// One mesh against itself.
+    pub self_mode: bool,
+    /// Self-collision leaves out pairs within this many rings.
+    pub exclusion_rings: u32,
+    /// Contact distance.
+    pub thickness: f32,
+    /// Boxes within this of each other may hold a pair worth tracking.
+    pub margin: f32,
+}
+
+/// Draws `request.count` new triangle pairs of `a` and `b` into `out`; `known` are the
+/// triangle pairs of the current contacts (their patch pairs are left to them).
 pub(crate) fn draw(
-    sampling: Sampling,
-    n: usize,
+    request: &DrawRequest,
     a: &Placed,
     b: &Placed,
-    self_mode: bool,
-    exclusion_rings: u32,
-    thickness: f32,
-    margin: f32,
     known: impl Iterator<Item = (u32, u32)>,
     rng: &mut Xoshiro256PlusPlus,
     scratch: &mut SamplerScratch,
     out: &mut Vec<(u32, u32)>,
 ) {
+    let DrawRequest {
+        sampling,
+        count: n,
+        self_mode,
+        exclusion_rings,
+        margin,
+        ..
+    } = *request;
     scratch.overlap_count = 0;
     scratch.candidates_time = std::time::Duration::ZERO;
     if n == 0 {
@@ -143,16 +166,8 @@ pub(crate) fn draw(
             }
             let mut budget = n - uniform_n;
             if self_mode {
-                budget -= crease_probes(
-                    n / CREASE_SHARE,
-                    a,
-                    exclusion_rings,
-                    thickness,
-                    rng,
-                    scratch,
-                    out,
-                )
-                .min(budget);
+                budget -=
+                    crease_probes(n / CREASE_SHARE, a, request, rng, scratch, out).min(budget);
             }
             let xf = b.pose.as_ref().map(box_transform);
             let (bvh_a, bvh_b) = (&a.surface.patches.bvh, &b.surface.patches.bvh);
@@ -200,10 +215,7 @@ fn best_in_leaves(
     for i in 0..ts_a.len() {
         let ta = ts_a[(oa + i) % ts_a.len()];
         let tri_a = a.triangle(ta);
-        let (lo_a, hi_a) = (
-            tri_a[0].min(tri_a[1]).min(tri_a[2]),
-            tri_a[0].max(tri_a[1]).max(tri_a[2]),
-        );
+        let box_a = triangle_box(&tri_a);
         for j in 0..ts_b.len() {
             let tb = ts_b[(ob + j) % ts_b.len()];
             if let Some(rings) = exclusion
@@ -213,14 +225,7 @@ fn best_in_leaves(
                 continue;
             }
             let tri_b = b.triangle(tb);
-            let (lo_b, hi_b) = (
-                tri_b[0].min(tri_b[1]).min(tri_b[2]),
-                tri_b[0].max(tri_b[1]).max(tri_b[2]),
-            );
-            let gap = (lo_a - hi_b)
-                .max(lo_b - hi_a)
-                .max(glam::DVec3::ZERO)
-                .length();
+            let gap = box_gap(&box_a, &triangle_box(&tri_b));
             if best.is_some_and(|(d, _, _)| gap >= d) {
                 continue;
             }
@@ -240,16 +245,15 @@ fn best_in_leaves(
 /// becomes a start. A surface folding onto
 /// itself first touches just beyond the excluded zone, next to a sharp edge, where random
 /// starts mostly slide along the sheet. Returns the number of probes made.
-#[allow(clippy::too_many_arguments)]
 fn crease_probes(
     count: usize,
     a: &Placed,
-    exclusion_rings: u32,
-    thickness: f32,
+    request: &DrawRequest,
     rng: &mut Xoshiro256PlusPlus,
     scratch: &mut SamplerScratch,
     out: &mut Vec<(u32, u32)>,
 ) -> usize {
+    let (exclusion_rings, thickness) = (request.exclusion_rings, request.thickness);
     let scan_started = std::time::Instant::now();
     let topo = a.topology();
     let normals = &a.surface.normals;
@@ -287,20 +291,7 @@ fn crease_probes(
         let (_, edge, collapsed) = scratch.sharp[i];
         let [v0, v1] = topo.edge(edge).vertices;
         // Triangles within two rings of the edge.
-        scratch.ring.clear();
-        scratch.ring.extend([v0, v1]);
-        let mut start = 0;
-        for _ in 0..2 {
-            let end = scratch.ring.len();
-            for k in start..end {
-                for &w in topo.vertex_neighbours(scratch.ring[k]) {
-                    if !scratch.ring.contains(&w) {
-                        scratch.ring.push(w);
-                    }
-                }
-            }
-            start = end;
-        }
+        scratch.walk.collect(topo, &[v0, v1], 2, &mut scratch.ring);
         scratch.local.clear();
         for &v in &scratch.ring {
             scratch.local.extend_from_slice(topo.vertex_triangles(v));
@@ -310,23 +301,23 @@ fn crease_probes(
         scratch.boxes.clear();
         scratch.boxes.extend(scratch.local.iter().map(|&t| {
             let x = a.triangle(t);
-            (x, x[0].min(x[1]).min(x[2]), x[0].max(x[1]).max(x[2]))
+            (x, triangle_box(&x))
         }));
-        for (k, &(x, lo_x, hi_x)) in scratch.boxes.iter().enumerate() {
+        for (k, (x, box_x)) in scratch.boxes.iter().enumerate() {
             let (t, n_t) = (scratch.local[k], normals[scratch.local[k] as usize]);
-            for (j, &(y, lo_y, hi_y)) in scratch.boxes.iter().enumerate().skip(k + 1) {
+            for (j, (y, box_y)) in scratch.boxes.iter().enumerate().skip(k + 1) {
                 let u = scratch.local[j];
                 // The two sides of a fold face each other (a squeezed sheet meets itself
                 // edge-on or flat, in any orientation).
                 if !collapsed && n_t.dot(normals[u as usize]) >= CREASE_COS {
                     continue;
                 }
-                if (lo_x - hi_y).max(lo_y - hi_x).max_element() > h
+                if box_axis_gap(box_x, box_y) > h
                     || triangles_within_rings(topo, a.corners(t), a.corners(u), exclusion_rings)
                 {
                     continue;
                 }
-                if closest_points_triangle_triangle(&x, &y).distance <= h {
+                if closest_points_triangle_triangle(x, y).distance <= h {
                     out.push((t, u));
                 }
             }

@@ -12,8 +12,8 @@ use super::config::TrackerConfig;
 use super::contact::Contact;
 use super::feature::Feature;
 use super::local_search::{Located, SearchCounters, Searcher};
-use super::pruning::{PruneCounts, PruneScratch, prune};
-use super::sampling::{SamplerScratch, draw};
+use super::pruning::{PruneCounts, PruneScratch, PruneSettings, prune};
+use super::sampling::{DrawRequest, SamplerScratch, draw};
 use super::surface::{Placed, TrackedSurface};
 use super::timing::{Lap, StepTimes};
 use crate::geometry::{ClosestPoints, Pose};
@@ -360,15 +360,18 @@ impl Tracker {
         // Drawing has a cost of its own (hierarchy sampling looks for the overlapping patches
         // of the whole surface): late, it draws every eighth step only.
         let draw_now = !stats.cut || frame.is_multiple_of(LATE_SHARE as u64);
+        let request = DrawRequest {
+            sampling: cfg.sampling,
+            count: if draw_now { pairs_per_frame } else { 0 },
+            self_mode,
+            exclusion_rings: cfg.exclusion_rings,
+            thickness: cfg.thickness,
+            margin,
+        };
         draw(
-            cfg.sampling,
-            if draw_now { pairs_per_frame } else { 0 },
+            &request,
             &a,
             &b,
-            self_mode,
-            cfg.exclusion_rings,
-            cfg.thickness,
-            margin,
             self.contacts.iter().map(|c| (c.triangle_a, c.triangle_b)),
             &mut rng,
             &mut s.sampler,
@@ -423,16 +426,19 @@ impl Tracker {
         stats.times.local_search = lap.lap();
 
         // 3. Prune.
+        let settings = PruneSettings {
+            self_mode,
+            far_factor: cfg.far_factor,
+            far_epsilon: far_eps as f64,
+            thickness: cfg.thickness,
+            redundancy_rings: cfg.redundancy_rings,
+            max_pairs: cfg.max_active_pairs,
+        };
         prune(
             &mut s.pairs,
             a.topology(),
             b.topology(),
-            self_mode,
-            cfg.far_factor,
-            far_eps as f64,
-            cfg.thickness,
-            cfg.redundancy_rings,
-            cfg.max_active_pairs,
+            &settings,
             &mut s.prune,
             &mut stats.pruned,
         );
