@@ -4,6 +4,7 @@
 //! cargo run --release --example tracking_quality -- [--mesh PATH|generated:NAME]
 //!     [--motion whirl|crumple] [--frames 120] [--seed S] [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
 //!     [--sweep a,b,c | --no-sweep] [--sampling hierarchy|uniform|velocity] [--search two-step|full]
+//!     [--patch-size N]
 //! ```
 //!
 //! `--budget-us US` gives the tracker a time budget per step (`TrackerConfig::time_budget`):
@@ -67,7 +68,8 @@ use stochastic_collision::deform::{Animation, Crumple, Whirl};
 use stochastic_collision::geometry::closest_points_triangle_triangle;
 use stochastic_collision::mesh::{SelfExclusion, Topology, TriMesh, generate};
 use stochastic_collision::tracking::{
-    Sampling, SearchMode, TRAINING_MESHES, TRAINING_SEEDS, TrackedSurface, Tracker, TrackerConfig,
+    DEFAULT_PATCH_SIZE, Sampling, SearchMode, TRAINING_MESHES, TRAINING_SEEDS, TrackedSurface,
+    Tracker, TrackerConfig,
 };
 
 /// CPU time of the calling thread, µs: what the work cost, whatever else runs on the machine
@@ -115,6 +117,8 @@ struct Settings {
     search: SearchMode,
     /// The tracker's time budget per step, µs (`TrackerConfig::time_budget`).
     budget_us: Option<u64>,
+    /// Largest triangles per patch of the incomplete hierarchy.
+    patch_size: u32,
 }
 
 fn parse_args() -> Result<Settings, String> {
@@ -130,6 +134,7 @@ fn parse_args() -> Result<Settings, String> {
         sampling: Sampling::default(),
         search: SearchMode::default(),
         budget_us: None,
+        patch_size: DEFAULT_PATCH_SIZE,
     };
     let mut explicit_sweep = false;
     let mut it = std::env::args_os().skip(1);
@@ -160,6 +165,7 @@ fn parse_args() -> Result<Settings, String> {
                 s.out_dir = PathBuf::from(it.next().ok_or("--out-dir needs a directory")?)
             }
             "--no-sweep" => s.sweep = None,
+            "--patch-size" => s.patch_size = number(it.next(), "--patch-size")?.max(1) as u32,
             "--budget-us" => {
                 let us = number(it.next(), "--budget-us")?;
                 if us == 0 {
@@ -194,7 +200,7 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
+                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --patch-size, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
                 ));
             }
         }
@@ -505,15 +511,14 @@ const STAGES: [&str; 6] = [
     "propagation",
 ];
 
-#[allow(clippy::too_many_arguments)]
 fn run_tracker(
     mesh: &TriMesh,
+    mut surface: TrackedSurface,
     whirl: &dyn Animation,
     truth: &Truth,
     config: TrackerConfig,
     tolerance: f32,
 ) -> RunResult {
-    let mut surface = TrackedSurface::new(mesh.clone());
     let mut tracker = Tracker::new(config.clone());
     let radius = config.thickness + tolerance;
     let mut positions = Vec::new();
@@ -908,7 +913,7 @@ fn main() {
     };
     let whirl = whirl.as_ref();
     let training = is_training(&name, settings.seed);
-    let probe = TrackedSurface::new(mesh.clone());
+    let probe = TrackedSurface::with_patch_size(mesh.clone(), settings.patch_size);
     let mut config = TrackerConfig::for_surface(&probe);
     config.seed = settings.seed;
     config.time_budget = settings.budget_us.map(std::time::Duration::from_micros);
@@ -949,7 +954,14 @@ fn main() {
             pairs_per_frame: n,
             ..config.clone()
         };
-        results.push(run_tracker(&mesh, whirl, &truth, cfg, tolerance));
+        results.push(run_tracker(
+            &mesh,
+            probe.clone(),
+            whirl,
+            &truth,
+            cfg,
+            tolerance,
+        ));
         show_progress("tracker sweep", i + 1, counts.len());
     }
     let main_run = results

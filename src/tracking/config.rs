@@ -84,9 +84,14 @@ pub struct TrackerConfig {
     /// A time budget per step instead of a fixed number of new pairs: the step's end is a
     /// deadline ([`Tracker::step_self_until`](super::Tracker::step_self_until)), and after
     /// every step the new pairs per frame (starting from `pairs_per_frame`) are scaled towards
-    /// what fills 80 % of the budget, at most ×1.5 or ÷2 per step, between 8 and
-    /// `max_active_pairs` ([`Tracker::pairs_per_frame_now`](super::Tracker::pairs_per_frame_now)).
-    /// Results then depend on the machine's speed; `None` (the default): a fixed
+    /// what fills 80 % of the budget beside the step's fixed cost (finding the candidates,
+    /// [`StepTimes::candidates`](super::StepTimes::candidates)), at most ×1.5 or ÷2 per step,
+    /// between 8 and `max_active_pairs`
+    /// ([`Tracker::pairs_per_frame_now`](super::Tracker::pairs_per_frame_now)). When the fixed
+    /// cost alone takes the budget, the pair work still gets a quarter of it after the
+    /// candidates (the step then overruns the budget, and an earlier deadline given to
+    /// [`Tracker::step_self_until`](super::Tracker::step_self_until), rather than search
+    /// nothing). Results then depend on the machine's speed; `None` (the default): a fixed
     /// `pairs_per_frame`, reproducible.
     pub time_budget: Option<std::time::Duration>,
 }

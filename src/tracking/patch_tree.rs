@@ -264,7 +264,12 @@ impl PatchTree {
             return true;
         }
         let wide = |pb: &Patch| {
-            // cos(θa + θb) ≤ 0, or cos φ ≤ sin(θa + θb).
+            // θa or θb ≥ 45°; else θa + θb < 90° and the test is cos(θa + θb) ≤ 0 or
+            // cos φ ≤ sin(θa + θb).
+            let half = std::f32::consts::FRAC_1_SQRT_2 + SLACK;
+            if pa.cone_cos <= half || pb.cone_cos <= half {
+                return true;
+            }
             let cos_sum = pa.cone_cos * pb.cone_cos - pa.cone_sin * pb.cone_sin;
             let sin_sum = pa.cone_sin * pb.cone_cos + pa.cone_cos * pb.cone_sin;
             cos_sum <= SLACK || pa.cone_axis.dot(pb.cone_axis) <= sin_sum + SLACK
@@ -519,6 +524,47 @@ mod tests {
                 (b - a).cross(c - a).normalize_or_zero()
             })
             .collect()
+    }
+
+    /// `may_crease` against the angles: two adjacent patches with cones of half-angles θa,
+    /// θb whose axes are φ apart may hold two normals more than 90° apart exactly when
+    /// θa + θb + φ > 90° (or either cone alone is wider than 45°); checked over a grid of
+    /// angles up to a half turn, away from the boundary.
+    #[test]
+    fn may_crease_follows_the_cone_angles() {
+        let sheet = generate::cloth_grid(1.0, 1.0, 2, 1);
+        let mut tree = PatchTree::new(&sheet, 2);
+        assert_eq!(tree.patches.len(), 2);
+        assert!(tree.patches[0].adjacent.contains(&1));
+        let steps: Vec<f32> = (0..=18).map(|k| k as f32 * 10f32.to_radians()).collect();
+        let mut checked = 0;
+        for &ta in &steps {
+            for &tb in &steps {
+                for &phi in &steps {
+                    let set = |p: &mut Patch, theta: f32, axis: Vec3| {
+                        p.cone_axis = axis;
+                        p.cone_cos = theta.cos();
+                        p.cone_sin = theta.sin();
+                        p.collapsed = false;
+                    };
+                    set(&mut tree.patches[0], ta, Vec3::Y);
+                    let axis_b = glam::Quat::from_rotation_x(phi) * Vec3::Y;
+                    set(&mut tree.patches[1], tb, axis_b);
+                    // The widest angle between two normals of the two cones (or of one).
+                    let widest = (ta + tb + phi).max(2.0 * ta).max(2.0 * tb);
+                    let margin = 2f32.to_radians();
+                    if (widest - std::f32::consts::FRAC_PI_2).abs() < margin {
+                        continue;
+                    }
+                    let expected = widest > std::f32::consts::FRAC_PI_2;
+                    assert_eq!(tree.may_crease(0), expected, "θa {ta} θb {tb} φ {phi}");
+                    checked += 1;
+                }
+            }
+        }
+        assert!(checked > 5000);
+        tree.patches[0].collapsed = true;
+        assert!(tree.may_crease(0));
     }
 
     #[test]

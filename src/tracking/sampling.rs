@@ -429,6 +429,7 @@ mod tests {
     use super::*;
     use crate::deform::Whirl;
     use crate::mesh::{TriMesh, generate};
+    use crate::tracking::DEFAULT_PATCH_SIZE;
     use glam::Vec3;
 
     fn sorted(mut v: Vec<(f32, u32, bool)>) -> Vec<(u32, bool, u32)> {
@@ -439,8 +440,10 @@ mod tests {
 
     /// Scanning only the patches that may crease finds every folded and collapsed edge that
     /// a scan of every edge finds, with the same sharpness: on a whirled tube (frames that
-    /// cut through themselves), a cloth folded flat onto itself, and a cloth squeezed in a
-    /// band (collapsed edges, no fold), with and without known-contact vertices left out.
+    /// cut through themselves), a cloth folded flat onto itself, a cloth squeezed in a band
+    /// (collapsed edges, no fold), and a whirled sphere in patches of up to 400 triangles
+    /// (normal cones wider than a half turn), with and without known-contact vertices left
+    /// out.
     #[test]
     fn the_patch_restricted_scan_finds_every_sharp_edge() {
         let tube = generate::tube(0.08, 2.0, 24, 160, true);
@@ -478,9 +481,19 @@ mod tests {
             .collect();
         cases.push((cloth.clone(), squeezed));
         cases.push((cloth.clone(), cloth.positions().to_vec()));
+        // Patches wider than a half turn (most of a sphere each), whirled.
+        let ball = generate::icosphere(1.0, 3);
+        let whirl = Whirl::new(&ball, 40, 5);
+        let mut balls = Vec::new();
+        for f in [8, 14, 20] {
+            let mut p = Vec::new();
+            whirl.positions(f, &mut p);
+            balls.push((ball.clone(), p));
+        }
         let mut found_any = [false; 2];
-        for (k, (mesh, positions)) in cases.into_iter().enumerate() {
-            let mut surface = TrackedSurface::new(mesh);
+        for (k, (mesh, positions)) in cases.into_iter().chain(balls).enumerate() {
+            let patch_size = if k >= 8 { 400 } else { DEFAULT_PATCH_SIZE };
+            let mut surface = TrackedSurface::with_patch_size(mesh, patch_size);
             surface.set_positions(&positions).unwrap();
             let (mut every, mut restricted) = (Vec::new(), Vec::new());
             for near_known in [vec![], (0..200).collect::<Vec<u32>>()] {

@@ -35,6 +35,12 @@ const ADAPT_MIN_FACTOR: f64 = 0.5;
 const ADAPT_MAX_FACTOR: f64 = 1.5;
 const MIN_ADAPTIVE_PAIRS: usize = 8;
 
+/// Under a time budget, the pair work (sampling, searching, pruning, propagation) always gets
+/// at least this share of the budget after the candidates are found, even when finding them
+/// took the whole budget: a budget smaller than a mesh's fixed cost is overrun, not turned
+/// into a tracker that searches nothing. A controller setting, not fitted to any mesh.
+const PAIR_FLOOR: f64 = 0.25;
+
 /// A tracked pair of locally closest features, persistent across frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrackedPair {
@@ -299,12 +305,16 @@ impl Tracker {
         let own = start + budget;
         let deadline = Some(deadline.map_or(own, |d| d.min(own)));
         self.step_with(a, b, self_mode, size, deadline, self.adaptive_pairs);
+        // The candidates cost what the mesh and its folds cost, whatever the pairs: the pairs
+        // per frame are scaled towards what fills the rest of the target (at least the floor).
         let took = start.elapsed().as_secs_f64();
+        let fixed = self.stats.times.candidates.as_secs_f64();
+        let budget_s = budget.as_secs_f64();
+        let target = (ADAPT_TARGET * budget_s - fixed).max(PAIR_FLOOR * budget_s);
         let factor = if self.stats.cut {
             ADAPT_MIN_FACTOR
         } else {
-            (ADAPT_TARGET * budget.as_secs_f64() / took.max(1e-9))
-                .clamp(ADAPT_MIN_FACTOR, ADAPT_MAX_FACTOR)
+            (target / (took - fixed).max(1e-9)).clamp(ADAPT_MIN_FACTOR, ADAPT_MAX_FACTOR)
         };
         let next = (self.adaptive_pairs as f64 * factor).round() as usize;
         self.adaptive_pairs = next.clamp(
@@ -322,7 +332,8 @@ impl Tracker {
         deadline: Option<Instant>,
         pairs_per_frame: usize,
     ) {
-        let passed = || deadline.is_some_and(|d| Instant::now() >= d);
+        let deadline = std::cell::Cell::new(deadline);
+        let passed = || deadline.get().is_some_and(|d| Instant::now() >= d);
         let mut lap = Lap::start();
         let cfg = &self.config;
         let mean_edge = a
@@ -382,6 +393,10 @@ impl Tracker {
         let drawing = lap.lap();
         stats.times.candidates = s.sampler.candidates_time.min(drawing);
         stats.times.sampling = drawing - stats.times.candidates;
+        // Under the tracker's own budget, the pair work keeps its floor (see `PAIR_FLOOR`).
+        if let (Some(budget), Some(d)) = (cfg.time_budget, deadline.get()) {
+            deadline.set(Some(d.max(Instant::now() + budget.mul_f64(PAIR_FLOOR))));
+        }
 
         // 2. Local search from every kept and new pair.
         let mut counters = SearchCounters::default();
