@@ -22,7 +22,9 @@ pub enum Sampling {
     /// Both features uniformly over the surfaces' (rest) area.
     Uniform,
     /// Over area weighted by how far the triangles moved since the last frame
-    /// (importance-driven: fast-moving parts make new contacts).
+    /// (importance-driven: fast-moving parts make new contacts). Between two meshes, each
+    /// side's motion is measured in the other's frame, so the relative rigid motion counts
+    /// as well as the deformation (a turning body's far end is drawn more than its hub).
     Velocity,
     /// Kimmerle et al.: only inside overlapping patch pairs of the incomplete hierarchy (a
     /// random descent below a candidate pair down to two leaves whose boxes still meet). For

@@ -8,7 +8,7 @@ use super::boxes::{Box64, box_axis_gap, box_gap, triangle_box};
 use super::config::Sampling;
 use super::patch_tree::{COLLAPSED_FRACTION, box_transform, random_leaf_pair};
 use super::surface::{Placed, TrackedSurface};
-use crate::geometry::closest_points_triangle_triangle;
+use crate::geometry::{PoseF64, closest_points_triangle_triangle};
 use crate::mesh::{RingWalk, VertexList, adjacent, triangles_within_rings};
 use glam::Vec3;
 
@@ -67,6 +67,9 @@ pub(crate) struct DrawRequest {
     pub thickness: f32,
     /// Boxes within this of each other may hold a pair worth tracking.
     pub margin: f32,
+    /// Two meshes: the second's pose in the first's frame at the previous step, if any (for
+    /// velocity sampling, which weighs the relative rigid motion too).
+    pub previous_pose: Option<PoseF64>,
 }
 
 /// Draws `request.count` new triangle pairs of `a` and `b` into `out`; `known` are the
@@ -96,9 +99,19 @@ pub(crate) fn draw(
     match sampling {
         Sampling::Uniform => uniform(n, a, b, self_mode, rng, out),
         Sampling::Velocity => {
-            velocity_cdf(a.surface, &mut scratch.cdf_a);
+            // Two meshes: each side's motion as the other side sees it (its deformation and
+            // the relative rigid motion since the last step); one mesh: its deformation.
+            let motion = match (b.pose, request.previous_pose) {
+                (Some(now), Some(before)) if !self_mode => Some((now, before)),
+                _ => None,
+            };
+            velocity_cdf(
+                a.surface,
+                motion.map(|(now, before)| (now.inverse(), before.inverse())),
+                &mut scratch.cdf_a,
+            );
             if !self_mode {
-                velocity_cdf(b.surface, &mut scratch.cdf_b);
+                velocity_cdf(b.surface, motion, &mut scratch.cdf_b);
             }
             let cdf_b = if self_mode {
                 &scratch.cdf_a
@@ -398,19 +411,31 @@ fn uniform(
     }
 }
 
-/// Cumulative weights `area · (ε + displacement)`: fast-moving triangles are drawn more.
-fn velocity_cdf(surface: &TrackedSurface, cdf: &mut Vec<f64>) {
+/// Cumulative weights `area · (ε + displacement)`: fast-moving triangles are drawn more. The
+/// displacement of a vertex is its motion since the surface's previous positions, in its own
+/// frame, or with `seen_from = (now, before)` in another frame that it was placed in by
+/// `before` at its previous positions and is placed in by `now` (rigid motion included).
+pub(crate) fn velocity_cdf(
+    surface: &TrackedSurface,
+    seen_from: Option<(PoseF64, PoseF64)>,
+    cdf: &mut Vec<f64>,
+) {
     cdf.clear();
     let mesh = surface.mesh();
     let floor = 1e-3 * surface.mean_edge_length() as f64;
+    let moved = |v: u32| match &seen_from {
+        None => surface.displacement(v) as f64,
+        Some((now, before)) => {
+            let here = now.transform_point(mesh.positions()[v as usize]);
+            let there = before.transform_point(surface.previous_position(v));
+            (here - there).length()
+        }
+    };
     let mut total = 0.0;
     for (t, tri) in mesh.triangles().iter().enumerate() {
         let [p, q, r] = mesh.triangle(t).map(|x| x.as_dvec3());
         let area = 0.5 * (q - p).cross(r - p).length();
-        let speed = tri
-            .iter()
-            .map(|&v| surface.displacement(v) as f64)
-            .fold(0.0, f64::max);
+        let speed = tri.iter().map(|&v| moved(v)).fold(0.0, f64::max);
         total += area * (floor + speed);
         cdf.push(total);
     }
@@ -529,5 +554,43 @@ mod tests {
             found_any[0] && found_any[1],
             "folds and collapses were both seen"
         );
+    }
+
+    /// Velocity weights of a rigid mesh: nothing moves in its own frame, so the weights are its
+    /// areas; seen from a frame in which it turns about one end, its far end weighs more
+    /// than its hub, in proportion to how far each moved.
+    #[test]
+    fn velocity_weights_see_rigid_motion_in_the_other_frame() {
+        use glam::{DQuat, DVec3};
+        let rod = generate::tube(0.05, 1.0, 8, 20, false);
+        let mut surface = TrackedSurface::new(rod.clone());
+        surface.set_positions(rod.positions()).unwrap();
+        let (mut own, mut seen) = (Vec::new(), Vec::new());
+        velocity_cdf(&surface, None, &mut own);
+        // Turning about the rod's lower end (y = -0.5) by 0.2 rad between the two steps.
+        let hinge = DVec3::new(0.0, -0.5, 0.0);
+        let turn = |angle: f64| {
+            let rotation = DQuat::from_rotation_z(angle);
+            PoseF64 {
+                rotation,
+                translation: hinge - rotation * hinge,
+            }
+        };
+        velocity_cdf(&surface, Some((turn(0.2), turn(0.0))), &mut seen);
+        let weight = |cdf: &[f64], t: usize| cdf[t] - if t == 0 { 0.0 } else { cdf[t - 1] };
+        let halves = |cdf: &[f64]| {
+            let mut sums = [0.0f64; 2];
+            for t in 0..rod.triangle_count() {
+                let c = rod.triangle(t).iter().map(|p| p.y).sum::<f32>() / 3.0;
+                sums[usize::from(c > 0.0)] += weight(cdf, t);
+            }
+            sums
+        };
+        let (own, seen) = (halves(&own), halves(&seen));
+        assert!(
+            (own[0] / own[1] - 1.0).abs() < 0.01,
+            "own frame: by area, {own:?}"
+        );
+        assert!(seen[1] > 2.0 * seen[0], "the far half moved more: {seen:?}");
     }
 }

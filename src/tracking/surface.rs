@@ -158,6 +158,11 @@ impl TrackedSurface {
         (self.mesh.positions()[v as usize] - self.previous[v as usize]).length()
     }
 
+    /// Where vertex `v` was before the last [`TrackedSurface::set_positions`].
+    pub(crate) fn previous_position(&self, v: u32) -> Vec3 {
+        self.previous[v as usize]
+    }
+
     /// The triangle containing the area fraction `u ∈ [0, 1)` (uniform over the rest area).
     pub(crate) fn triangle_at_area(&self, u: f64) -> u32 {
         let total = self.area_cdf.last().copied().unwrap_or(0.0);

@@ -16,7 +16,7 @@ use super::pruning::{PruneCounts, PruneScratch, PruneSettings, prune};
 use super::sampling::{DrawRequest, SamplerScratch, draw};
 use super::surface::{Placed, TrackedSurface};
 use super::timing::{Lap, StepTimes};
-use crate::geometry::{ClosestPoints, Pose};
+use crate::geometry::{ClosestPoints, Pose, PoseF64};
 
 /// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
 /// `Searcher::slide_limit`).
@@ -140,6 +140,9 @@ pub struct Tracker {
     frame: u64,
     stats: StepStats,
     scratch: Scratch,
+    /// Two meshes: the second's pose in the first's frame at the last step (velocity sampling
+    /// weighs the relative motion since then).
+    last_relative_pose: Option<PoseF64>,
 }
 
 #[derive(Debug, Default, Clone)]
@@ -163,6 +166,7 @@ impl Tracker {
             frame: 0,
             stats: StepStats::default(),
             scratch: Scratch::default(),
+            last_relative_pose: None,
         }
     }
 
@@ -215,6 +219,7 @@ impl Tracker {
     pub fn clear(&mut self) {
         self.pairs.clear();
         self.contacts.clear();
+        self.last_relative_pose = None;
     }
 
     /// One frame of self-collision tracking of `surface` at its current positions. Contacts
@@ -241,6 +246,7 @@ impl Tracker {
             pose: None,
         };
         self.step(placed, placed, true, surface.size(), deadline);
+        self.last_relative_pose = None;
         &self.contacts
     }
 
@@ -276,6 +282,7 @@ impl Tracker {
             pose: Some(rel),
         };
         self.step(pa, pb, false, a.size().max(b.size()), deadline);
+        self.last_relative_pose = Some(rel);
         if *pose_a != Pose::IDENTITY {
             for c in &mut self.contacts {
                 c.point_a = pose_a.transform_point(c.point_a);
@@ -378,6 +385,7 @@ impl Tracker {
             exclusion_rings: cfg.exclusion_rings,
             thickness: cfg.thickness,
             margin,
+            previous_pose: self.last_relative_pose,
         };
         draw(
             &request,
