@@ -61,8 +61,8 @@ pub(crate) struct Patch {
     /// (from [`PatchTree::assign_edges`]): the edges a fold or crease scan of this patch
     /// looks at.
     pub edges: Vec<CreaseEdge>,
-    /// Whether one of the patch's triangles has an edge shorter than
-    /// [`COLLAPSED_FRACTION`] of its rest length, from [`PatchTree::update_cones`].
+    /// Whether one of [`Patch::edges`] may be collapsed (shorter than the square root of its
+    /// [`CreaseEdge::collapse_below_sq`]), from [`PatchTree::update_cones`].
     pub collapsed: bool,
     /// Current box.
     pub min: Vec3,
@@ -278,13 +278,14 @@ impl PatchTree {
     }
 
     /// Recomputes every patch's normal cone from the triangles' unit normals, and its
-    /// [`Patch::collapsed`] flag from the triangles' (`O(triangles)`).
-    pub fn update_cones(&mut self, triangle_normals: &[Vec3], collapsed_triangles: &[bool]) {
+    /// [`Patch::collapsed`] flag from its edges at `positions` (`O(triangles)`).
+    pub fn update_cones(&mut self, triangle_normals: &[Vec3], positions: &[Vec3]) {
         for patch in &mut self.patches {
-            patch.collapsed = patch
-                .triangles
-                .iter()
-                .any(|&t| collapsed_triangles[t as usize]);
+            patch.collapsed = patch.edges.iter().any(|c| {
+                let [v0, v1] = c.vertices;
+                (positions[v0 as usize] - positions[v1 as usize]).length_squared()
+                    < c.collapse_below_sq
+            });
             let normals = patch
                 .triangles
                 .iter()
@@ -585,7 +586,7 @@ mod tests {
         // A closed torus: no two non-adjacent patches of the rest shape overlap much, but
         // far-apart patches never appear as overlapping without their boxes touching.
         let (mut stack, mut out) = (Vec::new(), Vec::new());
-        tree.update_cones(&normals_of(&mesh), &vec![false; mesh.triangle_count()]);
+        tree.update_cones(&normals_of(&mesh), mesh.positions());
         tree.self_overlaps(0.0, &mut stack, &mut out);
         for &(a, b) in &out {
             let (pa, pb) = (&tree.patches[a as usize], &tree.patches[b as usize]);
@@ -595,7 +596,7 @@ mod tests {
         // A flat sheet never folds; one folded in half does, where it folds.
         let sheet = generate::cloth_grid(1.0, 1.0, 16, 16);
         let mut tree = PatchTree::new(&sheet, 16);
-        tree.update_cones(&normals_of(&sheet), &vec![false; sheet.triangle_count()]);
+        tree.update_cones(&normals_of(&sheet), sheet.positions());
         assert!(tree.patches.iter().all(|p| p.cone_cos > 1.0 - 1e-6));
         out.clear();
         tree.self_overlaps(0.0, &mut stack, &mut out);
@@ -616,7 +617,7 @@ mod tests {
             .collect();
         let moved = TriMesh::new(folded, sheet.triangles().to_vec()).unwrap();
         tree.refit(&moved);
-        tree.update_cones(&normals_of(&moved), &vec![false; moved.triangle_count()]);
+        tree.update_cones(&normals_of(&moved), moved.positions());
         out.clear();
         tree.self_overlaps(0.02, &mut stack, &mut out);
         // The folded half lies over the flat one (far pairs), and the patches at the crease

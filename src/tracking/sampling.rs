@@ -282,7 +282,7 @@ fn crease_probes(
     }
     scratch.near_known.sort_unstable();
     scratch.near_known.dedup();
-    sharp_edges(a.surface, &scratch.near_known, false, &mut scratch.sharp);
+    sharp_edges(a.surface, &scratch.near_known, &mut scratch.sharp);
     // `count` edges drawn at random among the `PROBE_POOL · count` sharpest.
     let sharpest =
         |x: &(f32, u32, bool), y: &(f32, u32, bool)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
@@ -344,12 +344,11 @@ fn crease_probes(
 /// vertex in `near_known` (sorted), as (sharpness below 0: the normals' cosine, or the
 /// remaining fraction of the rest length mapped to [-1, 0); edge; collapsed rather than
 /// folded), written to `out` in no particular order. Only the edges of patches that
-/// [may crease](super::patch_tree::PatchTree::may_crease) are looked at, unless
-/// `every_edge`: the same set, at a cost that follows the folded part of the surface.
+/// [may crease](super::patch_tree::PatchTree::may_crease) are looked at: the same set as a
+/// scan of every edge, at a cost that follows the folded part of the surface.
 pub(crate) fn sharp_edges(
     surface: &TrackedSurface,
     near_known: &[u32],
-    every_edge: bool,
     out: &mut Vec<(f32, u32, bool)>,
 ) {
     out.clear();
@@ -357,7 +356,7 @@ pub(crate) fn sharp_edges(
     let positions = surface.mesh().positions();
     let tree = &surface.patches;
     for (p, patch) in tree.patches.iter().enumerate() {
-        if !every_edge && !tree.may_crease(p as u32) {
+        if !tree.may_crease(p as u32) {
             continue;
         }
         for c in &patch.edges {
@@ -457,6 +456,43 @@ mod tests {
     use crate::tracking::DEFAULT_PATCH_SIZE;
     use glam::Vec3;
 
+    /// The reference: every topology edge between two triangles, its fold from the current
+    /// normals and its collapse from the rest mesh's edge length.
+    fn every_sharp_edge(
+        surface: &TrackedSurface,
+        rest: &TriMesh,
+        near_known: &[u32],
+    ) -> Vec<(f32, u32, bool)> {
+        let (now, before) = (surface.mesh().positions(), rest.positions());
+        let mut out = Vec::new();
+        for (e, edge) in surface.topology().edges().iter().enumerate() {
+            let [t0, t1, ..] = edge.triangles[..] else {
+                continue;
+            };
+            let [v0, v1] = edge.vertices.map(|v| v as usize);
+            let (n0, n1) = (surface.normals[t0 as usize], surface.normals[t1 as usize]);
+            let fold = if n0 != Vec3::ZERO && n1 != Vec3::ZERO {
+                n0.dot(n1)
+            } else {
+                1.0
+            };
+            let rest_length = (before[v0] - before[v1]).length();
+            let collapse = if rest_length > 0.0 {
+                (now[v0] - now[v1]).length() / rest_length / COLLAPSED_FRACTION - 1.0
+            } else {
+                1.0
+            };
+            let sharpness = fold.min(collapse);
+            if sharpness < 0.0
+                && !near_known.contains(&(v0 as u32))
+                && !near_known.contains(&(v1 as u32))
+            {
+                out.push((sharpness, e as u32, collapse < fold));
+            }
+        }
+        out
+    }
+
     fn sorted(mut v: Vec<(f32, u32, bool)>) -> Vec<(u32, bool, u32)> {
         let mut out: Vec<_> = v.drain(..).map(|(c, e, k)| (e, k, c.to_bits())).collect();
         out.sort_unstable();
@@ -518,20 +554,16 @@ mod tests {
         let mut found_any = [false; 2];
         for (k, (mesh, positions)) in cases.into_iter().chain(balls).enumerate() {
             let patch_size = if k >= 8 { 400 } else { DEFAULT_PATCH_SIZE };
-            let mut surface = TrackedSurface::with_patch_size(mesh, patch_size);
+            let mut surface = TrackedSurface::with_patch_size(mesh.clone(), patch_size);
             surface.set_positions(&positions).unwrap();
-            let (mut every, mut restricted) = (Vec::new(), Vec::new());
+            let mut restricted = Vec::new();
             for near_known in [vec![], (0..200).collect::<Vec<u32>>()] {
-                sharp_edges(&surface, &near_known, true, &mut every);
-                sharp_edges(&surface, &near_known, false, &mut restricted);
+                let every = every_sharp_edge(&surface, &mesh, &near_known);
+                sharp_edges(&surface, &near_known, &mut restricted);
                 for &(_, _, collapsed) in &every {
                     found_any[collapsed as usize] = true;
                 }
-                assert_eq!(
-                    sorted(restricted.clone()),
-                    sorted(every.clone()),
-                    "case {k}"
-                );
+                assert_eq!(sorted(restricted.clone()), sorted(every), "case {k}");
             }
             let tree = &surface.patches;
             let scanned = (0..tree.patches.len() as u32)
@@ -545,7 +577,7 @@ mod tests {
             }
             if k == 7 {
                 assert!(
-                    every.is_empty() && scanned == 0,
+                    every_sharp_edge(&surface, &mesh, &[]).is_empty() && scanned == 0,
                     "a flat sheet is not scanned"
                 );
             }

@@ -2,7 +2,7 @@
 
 use glam::{DVec3, Vec3};
 
-use super::patch_tree::{COLLAPSED_FRACTION, PatchTree};
+use super::patch_tree::PatchTree;
 use crate::geometry::PoseF64;
 use crate::mesh::{MeshError, Topology, TriMesh};
 
@@ -25,11 +25,6 @@ pub struct TrackedSurface {
     pub(crate) patches: PatchTree,
     /// Unit normal of each triangle at the current positions (zero when degenerate).
     pub(crate) normals: Vec<Vec3>,
-    /// Per triangle `[a, b, c]`: the squared rest lengths of `ab`, `ac` and `bc`, times
-    /// [`COLLAPSED_FRACTION`]² (shorter now: collapsed).
-    collapse_limits: Vec<[f32; 3]>,
-    /// Per triangle: whether one of its edges is collapsed at the current positions.
-    collapsed: Vec<bool>,
     mean_edge: f32,
     size: f32,
     update_time: std::time::Duration,
@@ -69,20 +64,9 @@ impl TrackedSurface {
         }
         let mut patches = PatchTree::new(&mesh, patch_size);
         patches.assign_edges(&topology, &rest_edge_lengths);
-        let f2 = COLLAPSED_FRACTION * COLLAPSED_FRACTION;
-        let collapse_limits: Vec<[f32; 3]> = (0..mesh.triangle_count())
-            .map(|t| {
-                let [a, b, c] = mesh.triangle(t);
-                [
-                    (b - a).length_squared() * f2,
-                    (c - a).length_squared() * f2,
-                    (c - b).length_squared() * f2,
-                ]
-            })
-            .collect();
-        let (mut normals, mut collapsed) = (Vec::new(), Vec::new());
-        triangle_shapes(&mesh, &collapse_limits, &mut normals, &mut collapsed);
-        patches.update_cones(&normals, &collapsed);
+        let mut normals = Vec::new();
+        triangle_normals(&mesh, &mut normals);
+        patches.update_cones(&normals, mesh.positions());
         TrackedSurface {
             previous: mesh.positions().to_vec(),
             mesh,
@@ -90,8 +74,6 @@ impl TrackedSurface {
             area_cdf,
             patches,
             normals,
-            collapse_limits,
-            collapsed,
             mean_edge,
             size,
             update_time: std::time::Duration::ZERO,
@@ -110,13 +92,9 @@ impl TrackedSurface {
             return Err(e);
         }
         self.patches.refit(&self.mesh);
-        triangle_shapes(
-            &self.mesh,
-            &self.collapse_limits,
-            &mut self.normals,
-            &mut self.collapsed,
-        );
-        self.patches.update_cones(&self.normals, &self.collapsed);
+        triangle_normals(&self.mesh, &mut self.normals);
+        self.patches
+            .update_cones(&self.normals, self.mesh.positions());
         self.update_time = started.elapsed();
         Ok(())
     }
@@ -176,28 +154,13 @@ impl TrackedSurface {
     }
 }
 
-/// Unit normals of `mesh`'s triangles (zero for degenerate ones) and whether an edge of each
-/// is shorter than its limit in `collapse_limits` (squared; a margin of 1e-4 makes the flag
-/// err on the side of collapsed), written to `normals` and `collapsed`.
-fn triangle_shapes(
-    mesh: &TriMesh,
-    collapse_limits: &[[f32; 3]],
-    normals: &mut Vec<Vec3>,
-    collapsed: &mut Vec<bool>,
-) {
-    normals.clear();
-    collapsed.clear();
-    for (t, limit) in collapse_limits.iter().enumerate() {
+/// Unit normals of `mesh`'s triangles (zero for degenerate ones), written to `out`.
+fn triangle_normals(mesh: &TriMesh, out: &mut Vec<Vec3>) {
+    out.clear();
+    out.extend((0..mesh.triangle_count()).map(|t| {
         let [a, b, c] = mesh.triangle(t);
-        let (ab, ac, bc) = (b - a, c - a, c - b);
-        normals.push(ab.cross(ac).normalize_or_zero());
-        let margin = 1.0 + 1e-4;
-        collapsed.push(
-            ab.length_squared() < limit[0] * margin
-                || ac.length_squared() < limit[1] * margin
-                || bc.length_squared() < limit[2] * margin,
-        );
-    }
+        (b - a).cross(c - a).normalize_or_zero()
+    }));
 }
 
 /// A surface seen from a frame: its own (`pose == None`) or another mesh's.

@@ -7,7 +7,9 @@ use std::time::{Duration, Instant};
 /// [`TrackedSurface::update_time`](super::TrackedSurface::update_time).
 ///
 /// Measured with [`Instant`] around each stage (a few clock reads per step): a profile of
-/// where the time goes, not a result (the tracker's answers never depend on it).
+/// where the time goes. Without a time budget the tracker's answers never depend on it; under
+/// [`TrackerConfig::time_budget`](super::TrackerConfig::time_budget) the pairs per frame adapt
+/// to the budget beside `candidates`.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct StepTimes {
     /// Finding where new pairs can come from: the overlapping patch pairs of the incomplete
