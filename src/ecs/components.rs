@@ -219,17 +219,28 @@ impl Fidelity {
 #[reflect(Component, Clone, Debug, Default)]
 pub struct SelfCollision;
 
-/// Continuous collision for a rigid collider: in a run where it moved, its pairs are tested
-/// over the whole motion since the last run (from its last pose to this one, translation and
-/// rotation), so that it cannot pass through a thin mesh between two runs unseen. Its
-/// broad-phase box covers the motion; a pair whose discrete test finds no contact, or that did
-/// not touch before, gets the exact continuous query
-/// ([`ccd::time_of_impact`](crate::ccd::time_of_impact)), whatever its fidelity, and a
-/// contact it finds carries its time of impact
-/// ([`ContactPoint::time_of_impact`](super::ContactPoint::time_of_impact)). A move is swept
-/// as a straight motion whatever caused it: remove the component for a teleport. A swept
-/// pair that a time budget leaves untested in a run (past the deadline) is not swept in it.
-/// Deformable meshes are not swept by the plugin yet (the core has
+/// Continuous collision: a collider with it cannot pass through a thin mesh between two runs
+/// unseen.
+///
+/// - **Rigid pairs tested exactly or with ADB**: in a run where a rigid collider with it
+///   moved, its pairs are tested over the whole motion since the last run (from its last
+///   pose to this one, translation and rotation). Its broad-phase box covers the motion; a
+///   pair whose discrete test finds no contact, or that did not touch before, gets the exact
+///   continuous query ([`ccd::time_of_impact`](crate::ccd::time_of_impact)), and a contact it
+///   finds carries its time of impact
+///   ([`ContactPoint::time_of_impact`](super::ContactPoint::time_of_impact)).
+/// - **Tracked pairs and tracked self-collision** ([`Fidelity::Tracking`], rigid or
+///   [`Deformable`]): the pair's tracker is continuous
+///   ([`TrackerConfig::continuous`](crate::tracking::TrackerConfig::continuous)) in every run,
+///   whichever variant: the neighbourhoods of its feature pairs are checked over both
+///   colliders' motions in the run and their deformation since the last run, so a fold, a
+///   sheet or a thin body passing through between two runs is reported, with its time of
+///   impact. Approximate, as the tracking is: a crossing far from every feature pair is not
+///   seen.
+///
+/// A move is swept as a straight motion whatever caused it: remove the component for a
+/// teleport. A swept pair that a time budget leaves untested in a run (past the deadline) is
+/// not swept in it. Deformable meshes in exact pairs are not swept by the plugin (the core has
 /// [`ccd::deforming_time_of_impact`](crate::ccd::deforming_time_of_impact)).
 #[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[reflect(Component, Clone, Debug, Default, PartialEq)]

@@ -151,7 +151,8 @@ fn update_surfaces(
 }
 
 /// The tracker configuration of a pair: thickness from the meshes, pairs per frame from the
-/// fidelity, a seed from the configured seed and the two entities.
+/// fidelity, a seed from the configured seed and the two entities, continuous tracking when
+/// either has [`ContinuousCollision`](super::ContinuousCollision).
 fn tracker_config(
     a: &TrackedSurface,
     b: &TrackedSurface,
@@ -159,8 +160,10 @@ fn tracker_config(
     seed: u64,
     ea: Entity,
     eb: Entity,
+    continuous: bool,
 ) -> TrackerConfig {
     let mut config = TrackerConfig::for_surface(a);
+    config.continuous = continuous;
     config.thickness = 0.05 * (a.mean_edge_length() + b.mean_edge_length());
     config.pairs_per_frame = pairs_per_frame.max(1) as usize;
     config.seed = seed ^ ea.to_bits().rotate_left(17) ^ eb.to_bits().rotate_left(41);
@@ -186,7 +189,7 @@ fn world_contact(c: &Contact, pose_a: &Pose, self_mode: bool) -> ContactPoint {
             a: c.triangle_a,
             b: c.triangle_b,
         }),
-        time_of_impact: None,
+        time_of_impact: c.time_of_impact,
     }
 }
 
@@ -213,7 +216,8 @@ fn job(
 ) -> Job {
     let (ea, eb) = (colliders.entry(a), colliders.entry(b));
     let key = (ea.entity, eb.entity);
-    let tracker = state.trackers.remove(&key).unwrap_or_else(|| {
+    let continuous = ea.continuous.is_some() || eb.continuous.is_some();
+    let mut tracker = state.trackers.remove(&key).unwrap_or_else(|| {
         let n = match ea.fidelity.combine(eb.fidelity) {
             Fidelity::Tracking { pairs_per_frame } => pairs_per_frame,
             _ => 1,
@@ -222,8 +226,17 @@ fn job(
             &state.surfaces[&ea.entity].surface,
             &state.surfaces[&eb.entity].surface,
         );
-        Tracker::new(tracker_config(sa, sb, n, seed, ea.entity, eb.entity))
+        Tracker::new(tracker_config(
+            sa, sb, n, seed, ea.entity, eb.entity, continuous,
+        ))
     });
+    if tracker.config().continuous != continuous {
+        let config = TrackerConfig {
+            continuous,
+            ..tracker.config().clone()
+        };
+        tracker.set_config(config);
+    }
     Job {
         key,
         pair,
@@ -235,14 +248,16 @@ fn job(
     }
 }
 
-/// Runs `jobs` in parallel, each on its own tracker; past `deadline` the trackers cut their
-/// work (see [`Tracker::step_self_until`]).
+/// Runs `jobs` of run `run` in parallel, each on its own tracker; past `deadline` the trackers
+/// cut their work (see [`Tracker::step_self_until`]). A continuous tracker between two meshes
+/// sweeps both colliders' motions in the run. The earliest contact with a time of impact
+/// comes first (the started event's time of impact), then at most `max_contacts` in all.
 fn run_jobs(
     jobs: &mut [Job],
     colliders: &ColliderTable,
     state: &TrackingState,
     pool: &CollisionTaskPool,
-    max_contacts: usize,
+    (max_contacts, run): (usize, u64),
     deadline: Option<Instant>,
 ) {
     pool.for_each_mut(jobs, 1, |job| {
@@ -251,16 +266,33 @@ fn run_jobs(
         let self_mode = job.a == job.b;
         let found: &[Contact] = if self_mode {
             job.tracker.step_self_until(sa, deadline)
+        } else if job.tracker.config().continuous {
+            let sb = &state.surfaces[&eb.entity].surface;
+            let (ma, mb) = (ea.motion_in(run), eb.motion_in(run));
+            job.tracker
+                .step_pair_moving_until(sa, &ma, sb, &mb, deadline)
         } else {
             let sb = &state.surfaces[&eb.entity].surface;
             job.tracker
                 .step_pair_until(sa, &ea.pose, sb, &eb.pose, deadline)
         };
-        let step = found.len().div_ceil(max_contacts.max(1)).max(1);
-        job.contacts = found
+        let max = max_contacts.max(1);
+        let first_impact = found
             .iter()
-            .step_by(step)
-            .map(|c| world_contact(c, &ea.pose, self_mode))
+            .enumerate()
+            .filter_map(|(i, c)| c.time_of_impact.map(|t| (t, i)))
+            .min_by(|x, y| x.0.total_cmp(&y.0))
+            .map(|(_, i)| i);
+        let step = found.len().div_ceil(max).max(1);
+        job.contacts = first_impact
+            .into_iter()
+            .chain(
+                (0..found.len())
+                    .step_by(step)
+                    .filter(|&i| Some(i) != first_impact),
+            )
+            .take(max)
+            .map(|i| world_contact(&found[i], &ea.pose, self_mode))
             .collect();
         job.pairs = found
             .iter()
@@ -420,7 +452,7 @@ pub fn self_collision(mut cx: TrackingContext) {
 /// first, at most `max_self_contacts` contacts each, the trackers' searches cut at the run's
 /// deadline under a time budget.
 fn tracked_jobs(cx: &mut TrackingContext, pairs: &[(u32, u32, u32)]) -> Vec<Job> {
-    let (seed, max) = (cx.config.seed, cx.config.max_self_contacts);
+    let (seed, max, run) = (cx.config.seed, cx.config.max_self_contacts, cx.diag.frame);
     let deadline = tracking_deadline(&cx.config, &cx.diag);
     let mut involved: Vec<u32> = pairs.iter().flat_map(|&(_, a, b)| [a, b]).collect();
     involved.sort_unstable();
@@ -433,7 +465,7 @@ fn tracked_jobs(cx: &mut TrackingContext, pairs: &[(u32, u32, u32)]) -> Vec<Job>
         .iter()
         .map(|&ends| job(state, colliders, ends, seed))
         .collect();
-    run_jobs(&mut jobs, colliders, state, &cx.pool, max, deadline);
+    run_jobs(&mut jobs, colliders, state, &cx.pool, (max, run), deadline);
     jobs
 }
 

@@ -96,6 +96,19 @@ pub struct TrackerConfig {
     /// nothing). Results then depend on the machine's speed; `None` (the default): a fixed
     /// `pairs_per_frame`, reproducible.
     pub time_budget: Option<std::time::Duration>,
+    /// Continuous tracking: each step also checks the surfaces over the step, from where
+    /// they were at the last step to where they are now (each vertex on a straight line in
+    /// the first mesh's frame), so that a sheet, a fold or a thin body that passed into or
+    /// through the other surface between two steps is reported, with its time of impact
+    /// ([`Contact::time_of_impact`](super::Contact::time_of_impact)). The triangles within a
+    /// few vertex rings of every pair kept after the step (more the farther they moved, up to
+    /// [`MAX_SWEEP_RINGS`](super::MAX_SWEEP_RINGS)) are swept and decided by the exact
+    /// continuous primitives of [`crate::ccd`], then the crossings are followed to their
+    /// neighbours like collision propagation (at most `propagation_limit`); new pairs are
+    /// drawn from patches that come within the step's motion of each other, not only from
+    /// patches that overlap at its end. A crossing no pair comes near is not seen: the check
+    /// is as approximate as the tracking. Default `false`: only the step's end is checked.
+    pub continuous: bool,
 }
 
 impl Default for TrackerConfig {
@@ -114,6 +127,7 @@ impl Default for TrackerConfig {
             propagation_limit: 256,
             seed: 0x5EED,
             time_budget: None,
+            continuous: false,
         }
     }
 }

@@ -31,6 +31,11 @@ pub struct Contact {
     pub depth: f32,
     /// Found by collision propagation from another contact rather than by a tracked pair.
     pub propagated: bool,
+    /// For a contact found by the continuous check
+    /// ([`TrackerConfig::continuous`](super::TrackerConfig::continuous)): the earliest time in
+    /// `[0, 1)` of the step at which its two triangles touched, the surfaces having passed
+    /// into or through each other since. `None` for contacts found at the step's end.
+    pub time_of_impact: Option<f32>,
 }
 
 impl Contact {
@@ -81,6 +86,7 @@ impl Contact {
             distance: d as f32,
             depth: depth.max(0.0) as f32,
             propagated,
+            time_of_impact: None,
         }
     }
 }

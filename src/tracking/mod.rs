@@ -46,6 +46,7 @@ mod patch_tree;
 mod pruning;
 mod sampling;
 mod surface;
+mod sweep;
 mod timing;
 mod tracker;
 
@@ -55,5 +56,6 @@ pub use contact::Contact;
 pub use feature::{Feature, FeatureShape, FeatureVertices, feature_distance};
 pub use pruning::PruneCounts;
 pub use surface::{DEFAULT_PATCH_SIZE, TrackedSurface};
+pub use sweep::MAX_SWEEP_RINGS;
 pub use timing::StepTimes;
 pub use tracker::{PairList, StepStats, TrackedPair, Tracker};

@@ -28,6 +28,10 @@ pub struct TrackedSurface {
     mean_edge: f32,
     size: f32,
     update_time: std::time::Duration,
+    /// Successful [`TrackedSurface::set_positions`] calls so far.
+    generation: u64,
+    /// The farthest any vertex moved in the last one.
+    max_displacement: f32,
 }
 
 impl TrackedSurface {
@@ -77,6 +81,8 @@ impl TrackedSurface {
             mean_edge,
             size,
             update_time: std::time::Duration::ZERO,
+            generation: 0,
+            max_displacement: 0.0,
         }
     }
 
@@ -95,8 +101,29 @@ impl TrackedSurface {
         triangle_normals(&self.mesh, &mut self.normals);
         self.patches
             .update_cones(&self.normals, self.mesh.positions());
+        self.max_displacement = self
+            .previous
+            .iter()
+            .zip(self.mesh.positions())
+            .map(|(p, q)| p.distance_squared(*q))
+            .fold(0.0, f32::max)
+            .sqrt();
+        self.generation += 1;
         self.update_time = started.elapsed();
         Ok(())
+    }
+
+    /// How many times [`TrackedSurface::set_positions`] succeeded: a tracker compares it with
+    /// the value at its last step to know whether the surface deformed since (and whether
+    /// the previous positions are where the vertices were then).
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
+    /// The farthest any vertex moved in the last successful
+    /// [`TrackedSurface::set_positions`] (0 before the first).
+    pub fn max_displacement(&self) -> f32 {
+        self.max_displacement
     }
 
     /// Wall-clock time of the last successful [`TrackedSurface::set_positions`] (positions,

@@ -24,12 +24,20 @@ pub struct StepTimes {
     pub pruning: Duration,
     /// Contacts and collision propagation around them.
     pub propagation: Duration,
+    /// The continuous check ([`TrackerConfig::continuous`](super::TrackerConfig::continuous)):
+    /// the pairs' neighbourhoods over the step and the crossings' contacts.
+    pub continuous: Duration,
 }
 
 impl StepTimes {
     /// The sum of the stages.
     pub fn total(&self) -> Duration {
-        self.candidates + self.sampling + self.local_search + self.pruning + self.propagation
+        self.candidates
+            + self.sampling
+            + self.local_search
+            + self.pruning
+            + self.propagation
+            + self.continuous
     }
 }
 

@@ -1,6 +1,6 @@
 //! The tracker: persistent feature pairs, updated every frame.
 
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
 use std::time::Instant;
 
 use glam::DVec3;
@@ -15,7 +15,9 @@ use super::local_search::{Located, SearchCounters, Searcher};
 use super::pruning::{PruneCounts, PruneScratch, PruneSettings, prune};
 use super::sampling::{DrawRequest, SamplerScratch, draw};
 use super::surface::{Placed, TrackedSurface};
+use super::sweep::{Sweep, SweepScratch, SweptSide};
 use super::timing::{Lap, StepTimes};
+use crate::ccd::RigidMotion;
 use crate::geometry::{ClosestPoints, Pose, PoseF64};
 
 /// Sliding self pairs within this many mean edge lengths keep descending and are kept (see
@@ -96,6 +98,18 @@ pub struct StepStats {
     pub cut: bool,
     /// Kept pairs re-measured without a local search because the deadline had passed.
     pub remeasured: usize,
+    /// Continuous tracking ([`TrackerConfig::continuous`]): pairs whose neighbourhoods were
+    /// checked over the step.
+    pub swept: usize,
+    /// Continuous tracking: pairs not checked over the step because the deadline had passed
+    /// (past it, one in eight still is).
+    pub sweep_skipped: usize,
+    /// Continuous tracking: triangle pairs decided by the continuous primitives.
+    pub sweep_triangle_pairs: usize,
+    /// Continuous tracking: contacts added because their triangles touched during the step
+    /// (not among the contacts at its end; they carry a
+    /// [`Contact::time_of_impact`]).
+    pub crossings: usize,
     /// Where the step's time went.
     pub times: StepTimes,
 }
@@ -143,6 +157,19 @@ pub struct Tracker {
     /// Two meshes: the second's pose in the first's frame at the last step (velocity sampling
     /// weighs the relative motion since then).
     last_relative_pose: Option<PoseF64>,
+    /// The surfaces' [`TrackedSurface::generation`] at the last step (whether they deformed
+    /// since).
+    last_generations: Option<[u64; 2]>,
+}
+
+/// Where the surfaces were at the start of a step (for the continuous check).
+#[derive(Clone, Copy)]
+struct StepStart {
+    /// Whether each surface deformed since the last step (its vertices start at its previous
+    /// positions).
+    deformed: [bool; 2],
+    /// Two meshes: the second's pose in the first's frame at the start, if known.
+    pose_b: Option<PoseF64>,
 }
 
 #[derive(Debug, Default, Clone)]
@@ -153,6 +180,8 @@ struct Scratch {
     prune: PruneScratch,
     visited: HashSet<(u32, u32)>,
     queue: Vec<(u32, u32)>,
+    sweep: SweepScratch,
+    contact_keys: HashMap<(u32, u32), usize>,
 }
 
 impl Tracker {
@@ -167,6 +196,7 @@ impl Tracker {
             stats: StepStats::default(),
             scratch: Scratch::default(),
             last_relative_pose: None,
+            last_generations: None,
         }
     }
 
@@ -200,7 +230,8 @@ impl Tracker {
     }
 
     /// The contacts of the last step: tracked pairs closer than the thickness first (closest
-    /// first), then propagated ones.
+    /// first), then propagated ones, then (with [`TrackerConfig::continuous`]) the triangle
+    /// pairs that touched during the step, earliest first.
     pub fn contacts(&self) -> &[Contact] {
         &self.contacts
     }
@@ -220,6 +251,17 @@ impl Tracker {
         self.pairs.clear();
         self.contacts.clear();
         self.last_relative_pose = None;
+        self.last_generations = None;
+    }
+
+    /// Whether each surface deformed since the last step.
+    fn deformed(&self, a: &TrackedSurface, b: &TrackedSurface) -> [bool; 2] {
+        let now = [a.generation(), b.generation()];
+        match self.last_generations {
+            Some(last) => [now[0] != last[0], now[1] != last[1]],
+            // First step: the last deformation is the best guess of the motion.
+            None => now.map(|g| g > 0),
+        }
     }
 
     /// One frame of self-collision tracking of `surface` at its current positions. Contacts
@@ -245,8 +287,13 @@ impl Tracker {
             surface,
             pose: None,
         };
-        self.step(placed, placed, true, surface.size(), deadline);
+        let start = StepStart {
+            deformed: self.deformed(surface, surface),
+            pose_b: None,
+        };
+        self.step(placed, placed, true, surface.size(), deadline, start);
         self.last_relative_pose = None;
+        self.last_generations = Some([surface.generation(); 2]);
         &self.contacts
     }
 
@@ -263,13 +310,66 @@ impl Tracker {
     }
 
     /// [`step_pair`](Self::step_pair) inside a time budget (see
-    /// [`step_self_until`](Self::step_self_until)).
+    /// [`step_self_until`](Self::step_self_until)). With
+    /// [`TrackerConfig::continuous`], the step's motion is from the poses of the last step
+    /// (none on the first: only deformation is swept then).
     pub fn step_pair_until(
         &mut self,
         a: &TrackedSurface,
         pose_a: &Pose,
         b: &TrackedSurface,
         pose_b: &Pose,
+        deadline: Option<Instant>,
+    ) -> &[Contact] {
+        let start = self.last_relative_pose;
+        self.pair_step(a, pose_a, b, pose_b, start, deadline)
+    }
+
+    /// [`step_pair_until`](Self::step_pair_until) for meshes that moved over the step as
+    /// `motion_a` and `motion_b` say (from their poses at the start of the step to those at
+    /// its end): with [`TrackerConfig::continuous`] that motion is swept (each vertex on a
+    /// straight line in `a`'s frame), whatever the poses at the last step were; the
+    /// contacts are at the end poses. Use it when the tracker did not see the start poses
+    /// (a new pair, a skipped step).
+    ///
+    /// # Example
+    /// ```
+    /// use stochastic_collision::ccd::RigidMotion;
+    /// use stochastic_collision::prelude::*;
+    /// use stochastic_collision::tracking::{TrackedSurface, Tracker, TrackerConfig};
+    ///
+    /// // A sheet that passes through another in one step: at the step's end they are apart.
+    /// let sheet = TrackedSurface::new(generate::cloth_grid(1.0, 1.0, 10, 10));
+    /// let config = TrackerConfig { continuous: true, ..TrackerConfig::for_surface(&sheet) };
+    /// let mut tracker = Tracker::new(config);
+    /// let still = RigidMotion::still(Pose::IDENTITY);
+    /// let through = RigidMotion::new(
+    ///     Pose::from_translation(Vec3::new(0.05, 0.2, 0.03)),
+    ///     Pose::from_translation(Vec3::new(0.05, -0.2, 0.03)),
+    /// );
+    /// let contacts = tracker.step_pair_moving_until(&sheet, &still, &sheet, &through, None);
+    /// let hit = contacts.iter().find_map(|c| c.time_of_impact).expect("caught");
+    /// assert!((hit - 0.5).abs() < 1e-3);
+    /// ```
+    pub fn step_pair_moving_until(
+        &mut self,
+        a: &TrackedSurface,
+        motion_a: &RigidMotion,
+        b: &TrackedSurface,
+        motion_b: &RigidMotion,
+        deadline: Option<Instant>,
+    ) -> &[Contact] {
+        let start = motion_a.start.inverse_mul(&motion_b.start).to_f64();
+        self.pair_step(a, &motion_a.end, b, &motion_b.end, Some(start), deadline)
+    }
+
+    fn pair_step(
+        &mut self,
+        a: &TrackedSurface,
+        pose_a: &Pose,
+        b: &TrackedSurface,
+        pose_b: &Pose,
+        start_pose: Option<PoseF64>,
         deadline: Option<Instant>,
     ) -> &[Contact] {
         let rel = pose_a.inverse_mul(pose_b).to_f64();
@@ -281,8 +381,13 @@ impl Tracker {
             surface: b,
             pose: Some(rel),
         };
-        self.step(pa, pb, false, a.size().max(b.size()), deadline);
+        let start = StepStart {
+            deformed: self.deformed(a, b),
+            pose_b: start_pose,
+        };
+        self.step(pa, pb, false, a.size().max(b.size()), deadline, start);
         self.last_relative_pose = Some(rel);
+        self.last_generations = Some([a.generation(), b.generation()]);
         if *pose_a != Pose::IDENTITY {
             for c in &mut self.contacts {
                 c.point_a = pose_a.transform_point(c.point_a);
@@ -302,16 +407,17 @@ impl Tracker {
         self_mode: bool,
         size: f32,
         deadline: Option<Instant>,
+        begin: StepStart,
     ) {
         let Some(budget) = self.config.time_budget else {
             let n = self.config.pairs_per_frame;
-            self.step_with(a, b, self_mode, size, deadline, n);
+            self.step_with(a, b, self_mode, size, deadline, n, begin);
             return;
         };
         let start = Instant::now();
         let own = start + budget;
         let deadline = Some(deadline.map_or(own, |d| d.min(own)));
-        self.step_with(a, b, self_mode, size, deadline, self.adaptive_pairs);
+        self.step_with(a, b, self_mode, size, deadline, self.adaptive_pairs, begin);
         // The candidates cost what the mesh and its folds cost, whatever the pairs: the pairs
         // per frame are scaled towards what fills the rest of the target (at least the floor).
         let took = start.elapsed().as_secs_f64();
@@ -330,6 +436,7 @@ impl Tracker {
         );
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn step_with(
         &mut self,
         a: Placed,
@@ -338,6 +445,7 @@ impl Tracker {
         size: f32,
         deadline: Option<Instant>,
         pairs_per_frame: usize,
+        begin: StepStart,
     ) {
         let deadline = std::cell::Cell::new(deadline);
         let passed = || deadline.get().is_some_and(|d| Instant::now() >= d);
@@ -367,7 +475,13 @@ impl Tracker {
         let mut rng = Xoshiro256PlusPlus::seed_from_u64(mix(cfg.seed, frame));
         s.starts.clear();
         let far_eps = cfg.far_epsilon.max(0.0) * size;
-        let margin = cfg.thickness.max(0.0) + far_eps;
+        // Continuous: patches that come within the step's motion of each other may have met.
+        let reach = if cfg.continuous {
+            motion_bound(&a, &b, self_mode, &begin)
+        } else {
+            0.0
+        };
+        let margin = cfg.thickness.max(0.0) + far_eps + reach;
         // Past the deadline an eighth of the work still gets done (new pairs every eighth step
         // and an eighth of them searched, each kept pair searched every eighth step): a
         // tracker that starts late, or stays over its budget, still finds and follows its
@@ -538,8 +652,111 @@ impl Tracker {
         stats.contacts = self.contacts.len();
         stats.propagated = added;
         stats.times.propagation = lap.lap();
+
+        // 5. Continuous: the neighbourhoods of the pairs checked over the step, closest first.
+        if cfg.continuous {
+            let sweep = Sweep {
+                a: SweptSide {
+                    surface: a.surface,
+                    deformed: begin.deformed[0],
+                    start_pose: None,
+                    end_pose: None,
+                },
+                b: SweptSide {
+                    surface: b.surface,
+                    deformed: begin.deformed[1],
+                    start_pose: begin.pose_b.or(b.pose),
+                    end_pose: b.pose,
+                },
+                self_mode,
+                excluded: |x, y| searcher.excluded(x, y),
+                size: size as f64,
+            };
+            let mut cut = stats.cut;
+            let counts = sweep.run(
+                self.pairs.iter().map(|p| (p.triangle_a, p.triangle_b)),
+                |k| {
+                    cut = cut || passed();
+                    !cut || (k as u64 + frame).is_multiple_of(LATE_SHARE as u64)
+                },
+                cfg.propagation_limit,
+                &mut s.sweep,
+            );
+            stats.cut = cut;
+            stats.swept = counts.swept;
+            stats.sweep_skipped = counts.skipped;
+            stats.sweep_triangle_pairs = counts.triangle_pairs;
+            s.contact_keys.clear();
+            s.contact_keys.extend(
+                self.contacts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, c)| (key(self_mode, c.triangle_a, c.triangle_b), i)),
+            );
+            // Earliest first: a contact at the step's end whose triangles touched during it
+            // gets the time they first touched.
+            for c in &s.sweep.crossings {
+                match s.contact_keys.entry(key(self_mode, c.ta, c.tb)) {
+                    std::collections::hash_map::Entry::Occupied(i) => {
+                        let contact = &mut self.contacts[*i.get()];
+                        contact.time_of_impact.get_or_insert(c.time as f32);
+                    }
+                    std::collections::hash_map::Entry::Vacant(slot) => {
+                        slot.insert(self.contacts.len());
+                        self.contacts
+                            .push(sweep.contact(c, cfg.thickness.max(0.0) as f64));
+                        stats.crossings += 1;
+                    }
+                }
+            }
+            stats.contacts = self.contacts.len();
+            stats.times.continuous = lap.lap();
+        }
         self.stats = stats;
     }
+}
+
+/// A bound on how far any point of one surface moved towards the other over the step (in the
+/// first mesh's frame): the surfaces' largest vertex displacements if they deformed, and for
+/// two meshes the relative rigid motion's largest displacement over the second's box (the
+/// displacement of a rigid motion is affine in the point: its largest length over a box is at
+/// a corner), with what the rotation does to the deformation.
+fn motion_bound(a: &Placed, b: &Placed, self_mode: bool, begin: &StepStart) -> f32 {
+    let deformation = |p: &Placed, deformed: bool| {
+        if deformed {
+            p.surface.max_displacement() as f64
+        } else {
+            0.0
+        }
+    };
+    let (da, db) = (
+        deformation(a, begin.deformed[0]),
+        deformation(b, begin.deformed[1]),
+    );
+    if self_mode {
+        return (2.0 * da) as f32;
+    }
+    let rigid = match (begin.pose_b, b.pose) {
+        (Some(start), Some(end)) => {
+            let bx = b.surface.mesh().aabb();
+            let mut most = 0.0f64;
+            for i in 0..8 {
+                let corner = glam::Vec3::new(
+                    if i & 1 == 0 { bx.min.x } else { bx.max.x },
+                    if i & 2 == 0 { bx.min.y } else { bx.max.y },
+                    if i & 4 == 0 { bx.min.z } else { bx.max.z },
+                );
+                most = most.max(
+                    end.transform_point(corner)
+                        .distance(start.transform_point(corner)),
+                );
+            }
+            // The deformation, seen through the start and the end rotation.
+            most + 2.0 * db
+        }
+        _ => 0.0,
+    };
+    (da + db + rigid) as f32
 }
 
 fn key(self_mode: bool, x: u32, y: u32) -> (u32, u32) {

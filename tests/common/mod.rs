@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 pub mod cli;
+pub mod shapes;
 
 /// The shared meshes the exact-query and ADB issues name for checks against parry and for
 /// the benchmarks, smallest first.

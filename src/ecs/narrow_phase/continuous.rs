@@ -5,16 +5,7 @@
 //! the time of impact).
 use super::super::contact::ContactPoint;
 use super::super::prepare::ColliderEntry;
-use crate::ccd::{CcdOptions, CcdWorkspace, RigidMotion, time_of_impact};
-
-/// A collider's motion in `run`: from its previous pose if it moved in this run, else still.
-fn motion(e: &ColliderEntry, run: u64) -> RigidMotion {
-    if e.still_since == run && e.previous_pose != e.pose {
-        RigidMotion::new(e.previous_pose, e.pose)
-    } else {
-        RigidMotion::still(e.pose)
-    }
-}
+use crate::ccd::{CcdOptions, CcdWorkspace, time_of_impact};
 
 /// The first contact of two rigid colliders over their motions in `run`, if they meet: at the
 /// time of impact, its point, the normal pushing `b` away from `a`, depth 0, the time of
@@ -28,9 +19,9 @@ pub(crate) fn swept_contact(
 ) -> Option<ContactPoint> {
     let hit = time_of_impact(
         a.geometry.mesh(),
-        &motion(a, run),
+        &a.motion_in(run),
         b.geometry.mesh(),
-        &motion(b, run),
+        &b.motion_in(run),
         &CcdOptions::default(),
         ws,
     )

@@ -12,6 +12,7 @@ use super::super::layers::ContactLayers;
 use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::adb::AdbTree;
 use crate::bvh::CollisionMesh;
+use crate::ccd::RigidMotion;
 use crate::geometry::{Aabb, Pose};
 
 /// The geometry of a collider: a shared rigid tree or a deformable mesh.
@@ -114,6 +115,15 @@ impl ColliderEntry {
     #[inline]
     pub fn is_swept(&self, run: u64) -> bool {
         self.swept_run == run && self.is_rigid()
+    }
+
+    /// Its motion in `run`: from its previous pose if it moved in this run, else still.
+    pub fn motion_in(&self, run: u64) -> RigidMotion {
+        if self.still_since == run && self.previous_pose != self.pose {
+            RigidMotion::new(self.previous_pose, self.pose)
+        } else {
+            RigidMotion::still(self.pose)
+        }
     }
 
     /// Its pairs' slots in the pair table.
