@@ -142,7 +142,7 @@ pub mod prelude {
         CollisionSensor, CollisionStarted, CollisionSystems, Contact, ContactLayer, ContactLayers,
         ContactQueue, ContinuousCollision, Deformable, Fidelity, FrameBudget,
         ImpulseResponsePlugin, MeshCollider, Method, ObserveCollisions, PairFilter,
-        PairFilterPlugin, PenaltyResponsePlugin, RefilterPairs, SelfCollision,
+        PairFilterPlugin, PenaltyResponsePlugin, RefilterPairs, ResponseBudget, SelfCollision,
         StochasticCollisionPlugin, StochasticCollisionPlugins, TouchingEntities,
     };
     #[cfg(feature = "debug_render")]

@@ -164,7 +164,7 @@ struct Consumed(Vec<(u64, f32)>);
 fn the_response_budget_defers_contacts_by_priority() {
     let mut app = cluster(CollisionConfig {
         budget: FrameBudget::Unlimited,
-        response_budget: Some(3),
+        response_budget: ResponseBudget::Contacts(3),
         ..Default::default()
     });
     app.init_resource::<Consumed>().add_systems(

@@ -134,7 +134,7 @@ fn values_survive_a_serialized_round_trip() {
         adb_decision: Decision::Evidence,
         adb_order: Order::BestFirst,
         contact_messages: true,
-        response_budget: Some(12),
+        response_budget: ResponseBudget::Contacts(12),
         seed: 77,
         ..Default::default()
     };

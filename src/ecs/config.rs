@@ -14,21 +14,41 @@ use crate::adb::{Decision, Order};
 pub enum FrameBudget {
     /// No limit: ADB pairs run until their `p_min`/`k_min` rule settles them.
     Unlimited,
-    /// A wall-clock budget for the collision stages (Prepare to Report). The narrow phase
-    /// measures what a test and an answer from memory cost, and what came after it in the
-    /// last run; it tests the exact pairs and then the most urgent others that fit in what is
-    /// left (aiming a little below the budget when runs overran), sharing node pairs among the
-    /// tested ADB pairs by priority. The others keep their last answer, one run older
+    /// A wall-clock budget for the collision stages (Prepare to Report), planned by the
+    /// [`BudgetController`](super::BudgetController) from measured costs: the narrow phase
+    /// tests the exact pairs and then, in what is left (aiming a little below the budget when
+    /// runs overran), the pairs that waited longest (a quarter of the tests) and the most
+    /// urgent others, sharing node pairs among the tested ADB pairs by priority. The others
+    /// keep their last answer, one run older
     /// ([`PairView::age`](super::PairView::age); an exact pair past its deadline gets one
-    /// from memory, [`Method::Coherence`](super::Method::Coherence)), and wait for a test,
-    /// first come first served. The Tracking stages (tracked pairs,
-    /// self-collision) share the budget: past the run's deadline each tracker does an eighth
-    /// of its work ([`Tracker::step_self_until`](crate::tracking::Tracker::step_self_until)).
+    /// from memory, [`Method::Coherence`](super::Method::Coherence)), and wait for a test.
+    /// The Tracking stages (tracked pairs, self-collision) share the budget: past the run's
+    /// deadline each tracker does an eighth of its work ([`Tracker::step_self_until`](crate::tracking::Tracker::step_self_until)).
     /// Results then depend on timing: use `NodePairs` for reproducible runs.
     Time(Duration),
     /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by
     /// priority. Deterministic (same results for any thread count and machine).
     NodePairs(u64),
+}
+
+/// How much the Response stage may do per run: the built-in responses and
+/// [`ContactQueue::consume`](super::ContactQueue::consume) stop offering contacts once it is
+/// spent; what is left stays queued, highest priority first, for the next run.
+#[derive(Reflect, Debug, Clone, Copy, PartialEq, Default)]
+#[reflect(Clone, Debug, Default, PartialEq)]
+pub enum ResponseBudget {
+    /// Every contact is offered.
+    #[default]
+    Unlimited,
+    /// A wall-clock budget, like the collision stages' [`FrameBudget::Time`]: the time spent
+    /// inside `consume` (the responses' work on each contact) on the
+    /// [`BudgetController`](super::BudgetController)'s clock, shared by every response of the
+    /// run. A run always offers at least one contact while the budget is not zero, so the
+    /// queue drains however slow a response is.
+    Time(Duration),
+    /// At most this many contacts consumed per run: a work budget, reproducible on any
+    /// machine.
+    Contacts(usize),
 }
 
 /// The plugin's configuration, a resource (change it at run time).
@@ -112,9 +132,10 @@ pub struct CollisionConfig {
     /// run to be swept. Default ¼: a ball moving a quarter of its diameter per run cannot
     /// pass through anything at least half its diameter thick between runs.
     pub continuous_motion: f32,
-    /// Contacts the Response stage may consume per run (`None`: all of them). What is left
-    /// stays in the [`ContactQueue`](super::ContactQueue) for the next run, highest priority first.
-    pub response_budget: Option<usize>,
+    /// How much the Response stage may do per run ([`ResponseBudget`]; unlimited by default).
+    /// What is left stays in the [`ContactQueue`](super::ContactQueue) for the next run,
+    /// highest priority first.
+    pub response_budget: ResponseBudget,
 }
 
 impl Default for CollisionConfig {
@@ -138,7 +159,7 @@ impl Default for CollisionConfig {
             contact_regions: false,
             max_self_contacts: 256,
             continuous_motion: 0.25,
-            response_budget: None,
+            response_budget: ResponseBudget::Unlimited,
         }
     }
 }

@@ -1,10 +1,10 @@
-//! Per-stage timings and work counters of the collision pipeline.
-use std::time::{Duration, Instant};
+//! Per-stage timings and work counters of the collision pipeline: read-only output (the
+//! pipeline decides nothing from it; the budget's own measurements are the
+//! [`BudgetController`](super::BudgetController)'s).
+use std::time::Duration;
 
 use bevy_ecs::prelude::*;
 use bevy_reflect::prelude::*;
-
-use super::config::{CollisionConfig, FrameBudget};
 
 /// A stage of the pipeline whose time is measured (the Prepare set holds two: `prepare` and
 /// `refit`; the Tracking set two: `self_collision` and `tracking`).
@@ -116,44 +116,18 @@ pub struct CollisionCounters {
 
 /// Timings and counters of the collision pipeline: per stage, the time of the last run (`None`
 /// = not run), runs and totals; the whole collision time (Prepare to Report) of the last run.
-#[derive(Resource, Reflect, Debug, Clone)]
+/// Times are read on the [`BudgetController`](super::BudgetController)'s clock. Read-only
+/// output: nothing in the pipeline reads it back.
+#[derive(Resource, Reflect, Debug, Clone, Default)]
 #[reflect(Resource, Clone, Debug, Default)]
 pub struct CollisionDiagnostics {
-    /// Runs of the pipeline so far.
+    /// Runs of the pipeline so far (the number of the current or last run).
     pub frame: u64,
-    #[reflect(ignore, default = "Instant::now")]
-    pub(crate) frame_start: Instant,
     /// Prepare to Report in the last run (wall clock, including scheduling gaps).
     pub collision_time: Duration,
     stages: [StageRecord; 8],
-    reserve: Duration,
-    /// The Report stage's time in the last run.
-    report_time: Duration,
-    #[reflect(ignore)]
-    narrow_end: Option<Instant>,
-    /// How far below the time budget the narrow phase aims (learnt from overruns).
-    margin: Duration,
-    /// The refit system began this run (the gather system then does not begin another).
-    pub(crate) begun_by_refit: bool,
     /// Work counters.
     pub counters: CollisionCounters,
-}
-
-impl Default for CollisionDiagnostics {
-    fn default() -> Self {
-        Self {
-            frame: 0,
-            frame_start: Instant::now(),
-            collision_time: Duration::ZERO,
-            stages: [StageRecord::default(); 8],
-            reserve: Duration::ZERO,
-            report_time: Duration::ZERO,
-            narrow_end: None,
-            margin: Duration::ZERO,
-            begun_by_refit: false,
-            counters: CollisionCounters::default(),
-        }
-    }
 }
 
 impl CollisionDiagnostics {
@@ -174,68 +148,22 @@ impl CollisionDiagnostics {
         r.total += time;
     }
 
-    /// Time to keep free after the narrow phase: what came after it in the last run
-    /// (Tracking, Report and the scheduling between them).
-    pub(crate) fn reserve_after_narrow(&self) -> Duration {
-        self.reserve
-    }
-
-    /// What the narrow phase aims the run's collision time at under a time `budget`: below
-    /// it by a margin that grows with each overrun and shrinks slowly otherwise (see
-    /// [`end_frame`]), at most a quarter of the budget. The frame-to-frame noise of the stages then
-    /// mostly stays inside the budget instead of above it.
-    pub(crate) fn time_target(&self, budget: Duration) -> Duration {
-        budget.saturating_sub(self.margin.min(budget / 4))
-    }
-
-    /// When the Tracking stages stop searching under a time `budget`: the run's target less
-    /// what the Report stage took last time, but no earlier than a sixteenth of the budget
-    /// from `now` (without any search nothing converges).
-    pub(crate) fn tracking_deadline(&self, budget: Duration, now: Instant) -> Instant {
-        let end = self.frame_start + self.time_target(budget).saturating_sub(self.report_time);
-        end.max(now + budget / 16)
-    }
-
-    /// Marks the end of the narrow phase in this run (for the reserve of the next).
-    pub(crate) fn narrow_phase_ended(&mut self) {
-        self.narrow_end = Some(Instant::now());
-    }
-}
-
-/// Starts a run (called by the first timed system of the run, so that no system of its own,
-/// and no scheduling hop, is needed): counts it, resets the stages' last times to "not run".
-pub(crate) fn begin_frame(diag: &mut CollisionDiagnostics) {
-    diag.frame += 1;
-    diag.frame_start = Instant::now();
-    for r in &mut diag.stages {
-        r.last = None;
-    }
-}
-
-/// Ends the collision stages of a run: the total time, overruns. Called at the end of the
-/// Report stage (not a system of its own: one scheduling hop less per run).
-pub(crate) fn end_frame(diag: &mut CollisionDiagnostics, config: &CollisionConfig) {
-    diag.collision_time = diag.frame_start.elapsed();
-    diag.report_time = diag.stage(Stage::Report).last.unwrap_or_default();
-    let after_stages: Duration = [Stage::SelfCollision, Stage::Tracking, Stage::Report]
-        .iter()
-        .filter_map(|&s| diag.stage(s).last)
-        .sum();
-    diag.reserve = match diag.narrow_end.take() {
-        Some(end) => end.elapsed().max(after_stages),
-        None => after_stages,
-    };
-    if let FrameBudget::Time(b) = config.budget {
-        // Up by half the overrun and a fiftieth of the budget, down by a thousandth of the
-        // budget per run within it: in balance, about one run in forty (a few per cent) goes
-        // over, and rarely by much (the margin follows a high quantile of the noise).
-        if diag.collision_time > b {
-            diag.counters.overrun_runs += 1;
-            let over = diag.collision_time - b;
-            diag.margin = (diag.margin + over / 2 + b / 50).min(b / 4);
-        } else {
-            diag.margin = diag.margin.saturating_sub(b / 1000);
+    /// Starts the record of run `run`: the stages' last times are reset to "not run".
+    pub(crate) fn begin_run(&mut self, run: u64) {
+        if self.frame == run {
+            return;
         }
+        self.frame = run;
+        for r in &mut self.stages {
+            r.last = None;
+        }
+    }
+
+    /// Ends the record of a run of the collision stages: their whole time, and whether it
+    /// went over a time budget.
+    pub(crate) fn end_run(&mut self, collision_time: Duration, overran: bool) {
+        self.collision_time = collision_time;
+        self.counters.overrun_runs += u64::from(overran);
     }
 }
 

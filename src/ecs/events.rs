@@ -33,16 +33,18 @@
 //! schedule runs several times per update (fixed time steps).
 //!
 //! [`CollisionSystems::Report`]: super::CollisionSystems::Report
-use std::time::Instant;
+use std::sync::Arc;
+use std::time::Duration;
 
 use bevy_ecs::prelude::*;
 use bevy_ecs::system::SystemParam;
 use bevy_reflect::prelude::*;
 use glam::Vec3;
 
+use super::budget::{BudgetClock, BudgetController, SystemClock};
 use super::components::{CollisionSensor, ObserveCollisions, TouchingEntities};
-use super::config::CollisionConfig;
-use super::diagnostics::{CollisionDiagnostics, Stage, end_frame};
+use super::config::{CollisionConfig, ResponseBudget};
+use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::narrow_phase::Method;
 use super::pairs::PairTable;
 use crate::bvh::TrianglePair;
@@ -181,13 +183,19 @@ pub struct CollisionError {
 /// Filled by the Report stage (when some response is registered: the built-in response
 /// plugins do it, a custom response calls [`ContactQueue::enable`] once). A response consumes
 /// contacts with [`ContactQueue::consume`] inside the per-run response budget
-/// ([`CollisionConfig::response_budget`]); what it leaves stays queued, counted, for the next
-/// run. A newer contact of the same pair replaces a waiting one.
+/// ([`CollisionConfig::response_budget`]: a time, or a number of contacts); what it leaves
+/// stays queued, counted, for the next run. A newer contact of the same pair replaces a
+/// waiting one.
 #[derive(Resource, Debug, Default)]
 pub struct ContactQueue {
     enabled: bool,
     queue: Vec<Contact>,
+    /// Contacts left to consume in this run (`None`: no count).
     remaining: Option<usize>,
+    /// Time left to consume contacts in this run (`None`: no time limit).
+    remaining_time: Option<Duration>,
+    /// The budget's clock (the system clock until the first run).
+    clock: Option<Arc<dyn BudgetClock>>,
     /// Contacts left unconsumed at the end of a run (carried into the next, or superseded
     /// there by a newer contact of the same pair), summed over runs.
     pub deferred_total: u64,
@@ -227,19 +235,44 @@ impl ContactQueue {
         self.queue.is_empty()
     }
 
-    /// What is left of this run's response budget (`None`: unlimited).
-    pub fn remaining_budget(&self) -> Option<usize> {
+    /// Contacts this run's response budget still allows (`None`: it counts no contacts).
+    pub fn remaining_contacts(&self) -> Option<usize> {
         self.remaining
+    }
+
+    /// Time this run's response budget still allows (`None`: it has no time limit).
+    pub fn remaining_time(&self) -> Option<Duration> {
+        self.remaining_time
+    }
+
+    /// Whether this run's response budget is spent (no contact will be offered).
+    pub fn budget_spent(&self) -> bool {
+        self.remaining == Some(0) || self.remaining_time == Some(Duration::ZERO)
     }
 
     /// Offers the waiting contacts to `respond`, highest priority first, until this run's
     /// response budget is spent. `respond` returns `true` if it consumed the contact (it
-    /// leaves the queue and costs one unit of budget), `false` to leave it to another response.
+    /// leaves the queue and costs one unit of a count budget), `false` to leave it to another
+    /// response. Under a time budget the time spent in this call is charged, and a contact is
+    /// offered only while some is left.
     pub fn consume(&mut self, mut respond: impl FnMut(&Contact) -> bool) -> usize {
-        let mut consumed = 0;
+        if self.budget_spent() {
+            return 0;
+        }
+        let clock = self.clock.clone().unwrap_or_else(|| Arc::new(SystemClock));
+        let start = self.remaining_time.map(|_| clock.now());
+        let deadline = start.zip(self.remaining_time).map(|(s, t)| s + t);
+        let (mut consumed, mut offered, mut stopped) = (0, false, false);
         let mut remaining = self.remaining;
         self.queue.retain(|c| {
-            if remaining == Some(0) || !respond(c) {
+            stopped = stopped
+                || remaining == Some(0)
+                || (offered && deadline.is_some_and(|d| clock.now() >= d));
+            if stopped {
+                return true;
+            }
+            offered = true;
+            if !respond(c) {
                 return true;
             }
             consumed += 1;
@@ -249,12 +282,25 @@ impl ContactQueue {
             false
         });
         self.remaining = remaining;
+        if let (Some(start), Some(left)) = (start, &mut self.remaining_time) {
+            *left = left.saturating_sub(clock.now().saturating_duration_since(start));
+        }
         self.consumed_total += consumed as u64;
         consumed
     }
 
-    fn refill(&mut self, fresh: &mut Vec<Contact>, budget: Option<usize>) {
-        self.remaining = budget;
+    fn refill(
+        &mut self,
+        fresh: &mut Vec<Contact>,
+        budget: ResponseBudget,
+        clock: Arc<dyn BudgetClock>,
+    ) {
+        (self.remaining, self.remaining_time) = match budget {
+            ResponseBudget::Unlimited => (None, None),
+            ResponseBudget::Time(t) => (None, Some(t)),
+            ResponseBudget::Contacts(n) => (Some(n), None),
+        };
+        self.clock = Some(clock);
         if !self.enabled {
             return;
         }
@@ -306,11 +352,12 @@ pub fn report_collisions(
     sensors: Query<(), With<CollisionSensor>>,
     mut writers: ReportWriters,
     mut commands: Commands,
+    mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
     mut fresh: Local<Vec<Contact>>,
 ) {
-    let start = Instant::now();
-    let frame = diag.frame;
+    let start = budget.now();
+    let frame = budget.run();
     let pairs = &mut *pairs;
     pairs
         .transitions
@@ -393,9 +440,11 @@ pub fn report_collisions(
     }
     counters.started += started;
     counters.ended += ended;
-    queue.refill(&mut fresh, config.response_budget);
-    diag.record(Stage::Report, start.elapsed(), started + ended);
-    end_frame(&mut diag, &config);
+    queue.refill(&mut fresh, config.response_budget, budget.clock());
+    let time = budget.stage_done(Stage::Report, start);
+    diag.record(Stage::Report, time, started + ended);
+    let end = budget.end_run(config.budget);
+    diag.end_run(end.collision_time, end.overran);
 }
 
 /// The messages the Report stage writes.

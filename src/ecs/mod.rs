@@ -37,8 +37,16 @@
 //! 6. **Response**: the built-in [`ImpulseResponsePlugin`] and [`PenaltyResponsePlugin`], or
 //!    your own systems, consuming contacts by priority within the response budget.
 //!
-//! A stage runs only when some entity needs it; [`CollisionDiagnostics`] has each stage's time
-//! (`None` when it did not run) and the work done. In a scene at rest (no collider changed)
+//! One [`BudgetController`] times every stage with its clock (the system clock, or a
+//! [`FakeClock`] a test moves) and plans each run under a [`FrameBudget::Time`] budget from
+//! what it measured: what Prepare and BroadPhase took, what Tracking and Report took last
+//! time, what a test and an answer from memory cost; the narrow phase tests what fits (a
+//! quarter of the tests for the pairs that waited longest, so none starves), the trackers
+//! stop at the run's deadline, and the Response stage has a [`ResponseBudget`] of its own.
+//! [`BudgetController::plan`] shows the last plan.
+//!
+//! A stage runs only when some entity needs it; [`CollisionDiagnostics`] (read-only output)
+//! has each stage's time (`None` when it did not run) and the work done. In a scene at rest (no collider changed)
 //! the broad phase does not sweep, and the narrow phase works only on the pairs still waiting
 //! for a test.
 //!
@@ -73,7 +81,7 @@ mod reflect;
 mod response;
 mod schedule;
 mod stamp;
-mod tracking_systems;
+mod tracking;
 
 #[cfg(feature = "bevy_mesh")]
 pub use bevy_mesh::{
@@ -81,12 +89,15 @@ pub use bevy_mesh::{
     MeshColliderSystems, MeshNameFilter, trimesh_from_bevy_mesh,
 };
 pub use broad_phase::BroadPhaseState;
-pub use budget::{pair_priority, pair_seed, slices};
+pub use budget::{
+    BudgetClock, BudgetController, FakeClock, RunPlan, SystemClock, pair_priority, pair_seed,
+    slices,
+};
 pub use components::{
     ColliderPose, ColliderScale, CollisionSensor, ContinuousCollision, Deformable, Fidelity,
     MeshCollider, ObserveCollisions, SelfCollision, TouchingEntities,
 };
-pub use config::{CollisionConfig, FrameBudget};
+pub use config::{CollisionConfig, FrameBudget, ResponseBudget};
 pub use contact::ContactPoint;
 #[cfg(feature = "debug_render")]
 pub use debug_render::{
@@ -118,4 +129,4 @@ pub use response::{
     integrate_velocities, penalty_response, sleep_bodies, update_body_inertia,
 };
 pub use schedule::{CollisionSchedule, CollisionSystems};
-pub use tracking_systems::{FeaturePairs, TrackingState};
+pub use tracking::{FeaturePairs, TrackingState};

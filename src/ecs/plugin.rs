@@ -5,6 +5,7 @@ use bevy_ecs::prelude::*;
 use bevy_ecs::schedule::ScheduleLabel;
 
 use super::broad_phase::{BroadPhaseState, update_broad_phase};
+use super::budget::BudgetController;
 use super::config::CollisionConfig;
 use super::diagnostics::CollisionDiagnostics;
 use super::events::{
@@ -18,7 +19,7 @@ use super::prepare::{
     update_colliders,
 };
 use super::schedule::{CollisionSchedule, CollisionSystems};
-use super::tracking_systems::{
+use super::tracking::{
     FeaturePairs, TrackingState, forget_untracked, holds_tracking_state, needs_self_pass,
     needs_tracking, prune_feature_pairs, self_collision, track_pairs,
 };
@@ -110,6 +111,7 @@ impl Plugin for StochasticCollisionPlugin {
             .insert_resource(CollisionSchedule(s))
             .insert_resource(CollisionTaskPool::new(self.threads))
             .init_resource::<CollisionDiagnostics>()
+            .init_resource::<BudgetController>()
             .init_resource::<ColliderTable>()
             .init_resource::<PrepareState>()
             .init_resource::<RemovedColliders>()

@@ -100,6 +100,8 @@ pub fn register_types(app: &mut App) {
         .register_type::<FeaturePairs>()
         .register_type::<CollisionConfig>()
         .register_type::<FrameBudget>()
+        .register_type::<ResponseBudget>()
+        .register_type::<RunPlan>()
         .register_type::<CollisionDiagnostics>()
         .register_type::<Stage>()
         .register_type::<StageRecord>()

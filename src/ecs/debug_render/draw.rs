@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::super::broad_phase::BroadPhaseState;
 use super::super::pairs::CollisionPairs;
 use super::super::prepare::{ColliderEntry, ColliderTable};
-use super::super::tracking_systems::FeaturePairs;
+use super::super::tracking::FeaturePairs;
 use super::config::CollisionGizmos;
 use crate::bvh::TrianglePair;
 use crate::geometry::{Aabb, closest_points_triangle_triangle};

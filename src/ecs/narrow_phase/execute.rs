@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use smallvec::SmallVec;
 
-use super::super::budget::SliceShare;
+use super::super::budget::{BudgetClock, SliceShare};
 use super::super::config::CollisionConfig;
 use super::super::contact::{
     bounds_contact, interpenetration_contact, node_contact, region_contact, triangle_pair_contact,
@@ -173,6 +173,8 @@ pub(crate) struct Context<'a> {
     pub deadlines: Deadlines,
     /// The measured rate of the tests (time mode), for the cap of each test.
     pub node_pairs_per_us: f64,
+    /// The budget's clock: the deadlines are its instants, the tests are timed with it.
+    pub clock: &'a dyn BudgetClock,
 }
 
 impl Context<'_> {
@@ -200,7 +202,8 @@ impl Context<'_> {
     /// job order the other chosen ones are tested and the rest answered (apart, or from
     /// memory). Past a deadline, chosen jobs are answered from memory too.
     pub fn run_chunk(&self, w: &mut ChunkWork) {
-        let start = Instant::now();
+        let clock = self.clock;
+        let start = clock.now();
         let mut counts = RunCounts::default();
         with_all_workspaces(|exact, adb, pairs, ccd| {
             let s = &mut Scratch {
@@ -216,16 +219,16 @@ impl Context<'_> {
             let is_exact = |j: &Job| j.chosen && j.method == Method::Exact;
             let mut late = false;
             for (i, job) in w.jobs.iter().enumerate().filter(|(_, j)| is_exact(j)) {
-                late = late || self.deadlines.exact.is_some_and(|d| Instant::now() > d);
+                late = late || self.deadlines.exact.is_some_and(|d| clock.now() > d);
                 let (answer, tested) = self.answer(job, late, s);
                 counts.count(&answer, tested);
                 w.answers[i] = answer;
             }
-            counts.test_time = start.elapsed();
+            counts.test_time = clock.now().saturating_duration_since(start);
             let mut late = false;
             for (i, job) in w.jobs.iter().enumerate().filter(|(_, j)| !is_exact(j)) {
                 let (answer, tested) = if job.chosen {
-                    let t = Instant::now();
+                    let t = clock.now();
                     if let Some(d) = self.deadlines.others {
                         // No test runs far past the deadline: an ADB test visits at most
                         // the node pairs the measured rate gets done before it.
@@ -234,7 +237,7 @@ impl Context<'_> {
                         s.node_cap = (left_us * self.node_pairs_per_us) as u64;
                     }
                     let answer = self.answer(job, late, s);
-                    counts.test_time += t.elapsed();
+                    counts.test_time += clock.now().saturating_duration_since(t);
                     answer
                 } else {
                     self.answer(job, true, s)
@@ -245,7 +248,10 @@ impl Context<'_> {
             counts.swept = s.swept;
             counts.caught = s.caught;
         });
-        counts.memory_time = start.elapsed().saturating_sub(counts.test_time);
+        counts.memory_time = clock
+            .now()
+            .saturating_duration_since(start)
+            .saturating_sub(counts.test_time);
         *w.counts = counts;
     }
 

@@ -4,53 +4,48 @@
 //! Only active pairs are worked on (new, moved, unsettled, or waiting for a test): a pair
 //! whose colliders did not change keeps its settled answer and costs nothing. Each active
 //! pair gets a priority ([`pair_priority`](super::pair_priority): last confidence,
-//! closeness, speed, waiting). Under a time budget the exact pairs and the most urgent
-//! others that fit (by the measured cost of a test) are tested; the rest keep their last
-//! answer, one run older, and wait for a test (an exact pair past its deadline gets an answer
-//! from memory, [`Method::Coherence`]). Tested ADB pairs get node-pair slices of the budget in
+//! closeness, speed, waiting). Under a time budget the [`BudgetController`] plans how many
+//! tests fit (by the measured cost of a test): the exact pairs, then a quarter of the rest
+//! for the pairs that waited longest and the others by priority, run longest waiting first
+//! so that a deadline cuts the freshest answers; the rest keep their last answer, one run
+//! older, and wait for a test (an exact pair past its deadline gets an answer from memory,
+//! [`Method::Coherence`]). Tested ADB pairs get node-pair slices of the budget in
 //! proportion to their priority, and an ADB traversal stops at its slice and reports its
 //! best estimate. Jobs are planned, then tested, on the task pool, each thread with its own
 //! workspaces and each run of jobs writing its answers in place; they are recorded in the
 //! table in job order, so the outcome is the same for any number of threads.
 mod continuous;
-mod costs;
 mod execute;
 mod memory;
 mod outcome;
 mod plan;
 
-use std::time::{Duration, Instant};
-
 use bevy_ecs::prelude::*;
 
-use super::budget::{SliceShare, WorkRate};
+use super::budget::{BudgetController, SliceShare, TestsDone};
 use super::config::{CollisionConfig, FrameBudget};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::pairs::{PairEnds, PairTable};
 use super::pool::CollisionTaskPool;
 use super::prepare::ColliderTable;
 use super::stamp::stamp;
-use costs::PairCosts;
 use execute::{Answer, ChunkWork, Context, Deadlines, RunCounts};
 pub(crate) use execute::{spread, with_workspaces};
 pub(crate) use memory::{PairMemory, decayed_probability};
 pub use outcome::{Method, PairOutcome};
-use plan::{Job, PlanCounts, choose_tests, plan_jobs, priority_cut, tests_that_fit};
+use plan::{Job, PlanCounts, choose_tests, plan_jobs};
 
-/// What the narrow phase keeps between runs: the measured costs and rates, reused buffers.
+/// What the narrow phase keeps between runs: reused buffers (the measured costs are the
+/// [`BudgetController`]'s).
 #[derive(Resource, Debug, Default)]
 pub struct NarrowPhaseState {
     jobs: Vec<Job>,
-    /// Pairs tested in the last run.
-    last_tests: usize,
     found: Vec<Vec<u32>>,
     work: Vec<Job>,
     answers: Vec<Answer>,
     plan_counts: Vec<PlanCounts>,
     run_counts: Vec<RunCounts>,
-    rate: WorkRate,
-    costs: PairCosts,
-    exact_node_pairs: f64,
+    oldest: Vec<(u32, u32)>,
     /// The run of the last change of configuration: answers found before it are not reused
     /// as they are.
     config_run: u64,
@@ -58,35 +53,29 @@ pub struct NarrowPhaseState {
 
 /// Answers the active pairs (all but tracked ones) in parallel.
 ///
-/// Under a time budget, the pairs tested are the most urgent ones that fit (by the measured
-/// cost of a test); the others keep their last answer and wait less next time. The deadline stays as a safety net for the tests themselves.
+/// Under a time budget, the pairs tested are the most urgent ones that fit, as the
+/// [`BudgetController`] plans them; the others keep their last answer and wait less next
+/// time. The deadline stays as a safety net for the tests themselves.
 pub fn narrow_phase(
     colliders: Res<ColliderTable>,
     mut pairs: ResMut<PairTable>,
     config: Res<CollisionConfig>,
     pool: Res<CollisionTaskPool>,
     mut state: ResMut<NarrowPhaseState>,
+    mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
-    let start = Instant::now();
+    let start = budget.now();
     let state = &mut *state;
-    let run = diag.frame;
+    let run = budget.run();
     let config_changed = config.is_changed();
     if config_changed {
         state.config_run = run;
     }
     let config_run = state.config_run;
-    // Under a time budget, the waiting pairs taken are about as many as could be tested: twice
-    // the most the budget holds at the measured cost of a test per thread, or of what was
-    // tested last time, and a few more (the rest waits).
-    let quota = match config.budget {
-        FrameBudget::Time(budget) => {
-            let fit = budget.as_secs_f64() * 1e6 / state.costs.test_us.max(0.1);
-            let fit = fit as usize * pool.threads();
-            Some(2 * fit.max(state.last_tests) + 64)
-        }
-        _ => None,
-    };
+    // Under a time budget, the waiting pairs taken are about twice as many as could be
+    // tested (the rest waits).
+    let quota = budget.waiting_quota(config.budget, pool.threads());
     activate(
         &colliders,
         &mut pairs,
@@ -133,30 +122,20 @@ pub fn narrow_phase(
     // Which pairs are tested: all of them, or under a time budget the exact pairs (asked for:
     // level geometry, things that must not pass through each other) and the most urgent of
     // the others that fit.
-    let (cut, deadlines, nodes) = match config.budget {
-        FrameBudget::Time(budget) => {
-            let target = diag.time_target(budget);
+    let (fit, deadlines, nodes) = match config.budget {
+        FrameBudget::Time(time) => {
             let testable = plan.testable as usize;
-            let now = Instant::now();
-            let costs = &state.costs;
-            let (count, deadline) = tests_that_fit(target, testable, jobs.len(), &diag, costs, now);
             let exact = testable - plan.optional.iter().sum::<u32>() as usize;
-            let optional = count.saturating_sub(exact);
-            // The ADB node pairs the measured rate gets done in the time for tests.
-            let tests_us = deadline.saturating_duration_since(now).as_secs_f64() * 1e6;
-            let rate = state.rate.node_pairs_per_us;
-            let nodes = (tests_us * rate - state.exact_node_pairs).max(0.0);
-            let cut = priority_cut(&plan.optional, optional);
-            // Exact pairs may also use the time the answers from memory were given.
-            let answers = Duration::from_secs_f64(jobs.len() as f64 * costs.memory_us * 1e-6);
-            let deadlines = Deadlines::at(deadline, deadline + answers);
-            (Some(cut), deadlines, Some(nodes as u64))
+            let tests = budget.plan_tests(time, jobs.len(), testable, exact);
+            let deadlines = Deadlines::at(tests.deadline, tests.exact_deadline);
+            let fit = (tests.optional, plan.optional);
+            (Some(fit), deadlines, Some(tests.node_pairs))
         }
         FrameBudget::NodePairs(n) => (None, Deadlines::default(), Some(n)),
         FrameBudget::Unlimited => (None, Deadlines::default(), None),
     };
-    let chosen_at = Instant::now();
-    let chosen = choose_tests(jobs, cut);
+    let chosen_at = budget.now();
+    let chosen = choose_tests(jobs, fit, &mut state.oldest);
     // ADB slices: the node pairs of the budget shared among the tested ADB pairs by priority.
     // In time mode the tests were chosen by what a test costs, so each gets enough to settle
     // (an eighth of the largest slice at least): a test cut short is wasted, tested again
@@ -189,6 +168,11 @@ pub fn narrow_phase(
             kept += u64::from(!job.cached);
         }
     }
+    // A deadline cuts the tests that come last: the longest waiting come first (ties in job
+    // order), so that a cut falls on the freshest answers and none starves.
+    if deadlines.others.is_some() {
+        work.sort_by_key(|j| std::cmp::Reverse(if j.chosen { j.stale } else { 0 }));
+    }
     // Tests in parallel, each run of jobs writing its own slots.
     let n = work.len();
     let answers = &mut state.answers;
@@ -198,7 +182,8 @@ pub fn narrow_phase(
     let counts = &mut state.run_counts;
     counts.clear();
     counts.resize(n.div_ceil(chunk), RunCounts::default());
-    let run_start = Instant::now();
+    let run_start = budget.now();
+    let clock = budget.clock();
     {
         let ctx = Context {
             colliders: &colliders,
@@ -207,7 +192,8 @@ pub fn narrow_phase(
             run,
             share,
             deadlines,
-            node_pairs_per_us: state.rate.node_pairs_per_us,
+            node_pairs_per_us: budget.node_pairs_per_us(),
+            clock: &*clock,
         };
         let mut chunks: Vec<_> = work
             .chunks(chunk)
@@ -221,7 +207,7 @@ pub fn narrow_phase(
             .collect();
         pool.for_each_mut(&mut chunks, 1, |w| ctx.run_chunk(w));
     }
-    let wall = run_start.elapsed();
+    let wall = budget.now().saturating_duration_since(run_start);
     for (job, answer) in work.iter().zip(answers.drain(..)) {
         match answer {
             Answer::Computed(outcome, record) => pairs.answer(job.pair, outcome, record, run),
@@ -229,14 +215,16 @@ pub fn narrow_phase(
         }
     }
     let total = counts.iter().fold(RunCounts::default(), RunCounts::add);
-    state.last_tests = total.tested as usize;
     // Wall-clock costs: the threads' times over the parallelism the section had.
     let busy = total.test_time + total.memory_time;
     let parallel =
         (busy.as_secs_f64() / wall.as_secs_f64().max(1e-9)).clamp(1.0, pool.threads() as f64);
     let test_time = total.test_time.div_f64(parallel);
     // What the jobs cost besides their tests once chosen (answers kept, apart, recorded).
-    let bookkeeping = chosen_at.elapsed().saturating_sub(test_time);
+    let bookkeeping = budget
+        .now()
+        .saturating_duration_since(chosen_at)
+        .saturating_sub(test_time);
     let c = &mut diag.counters;
     c.node_pairs += total.node_pairs;
     c.adb_pairs += u64::from(plan.adb);
@@ -248,15 +236,16 @@ pub fn narrow_phase(
     c.cached_pairs += cached;
     c.tested_pairs += total.tested;
     c.test_time += test_time;
-    state
-        .rate
-        .update(total.node_pairs, test_time.as_secs_f64() * 1e6);
-    state.exact_node_pairs = 0.7 * state.exact_node_pairs + 0.3 * total.exact_node_pairs as f64;
-    let costs = &mut state.costs;
-    PairCosts::learn(&mut costs.test_us, total.tested as usize, test_time);
-    PairCosts::learn(&mut costs.memory_us, jobs.len(), bookkeeping);
-    diag.record(Stage::NarrowPhase, start.elapsed(), n as u64);
-    diag.narrow_phase_ended();
+    budget.learn_tests(TestsDone {
+        tested: total.tested as usize,
+        node_pairs: total.node_pairs,
+        exact_node_pairs: total.exact_node_pairs,
+        test_time,
+        jobs: jobs.len(),
+        bookkeeping,
+    });
+    let time = budget.stage_done(Stage::NarrowPhase, start);
+    diag.record(Stage::NarrowPhase, time, n as u64);
 }
 
 /// Builds this run's active list: every pair after a change of configuration; otherwise the

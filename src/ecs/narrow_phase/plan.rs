@@ -1,13 +1,9 @@
 //! Planning a run of the narrow phase: each active pair's method, whether its last answer
 //! still holds, its priority; which pairs are tested under the budget.
-use std::time::{Duration, Instant};
-
 use super::super::budget::pair_priority;
 use super::super::components::Fidelity;
-use super::super::diagnostics::CollisionDiagnostics;
 use super::super::pairs::PairTable;
 use super::super::prepare::ColliderTable;
-use super::costs::PairCosts;
 use super::outcome::Method;
 
 /// One active pair's work in this run.
@@ -28,6 +24,9 @@ pub(crate) struct Job {
     /// Tested in this run ([`choose_tests`]).
     pub chosen: bool,
     pub p_min: f64,
+    /// Runs the pair's last answer was kept without a test (0: tested in the last run;
+    /// `u32::MAX`: never tested).
+    pub stale: u32,
     pub priority: f32,
 }
 
@@ -44,6 +43,7 @@ impl Job {
             cached: false,
             chosen: false,
             p_min: 1.0,
+            stale: 0,
             priority: 0.0,
         }
     }
@@ -135,6 +135,7 @@ pub(crate) fn plan_jobs(
         }
         job.priority = priority;
         job.bucket = priority_bucket(priority);
+        job.stale = memory.map_or(u32::MAX, |m| m.stale);
     }
     PlanCounts::count(jobs)
 }
@@ -198,54 +199,53 @@ pub(crate) struct Chosen {
     pub adb_priority: f64,
 }
 
-/// How many pairs can be tested in what is left of the time budget, by the measured costs,
-/// and the deadline of the tests. `testable` of the `all` pairs need a test; the others (and
-/// the tested ones past the deadline) are answered from memory, which takes time too.
-pub(crate) fn tests_that_fit(
-    budget: Duration,
-    testable: usize,
-    all: usize,
-    diag: &CollisionDiagnostics,
-    costs: &PairCosts,
-    now: Instant,
-) -> (usize, Instant) {
-    let spent = now.saturating_duration_since(diag.frame_start);
-    let reserve = diag.reserve_after_narrow();
-    let left_us = budget
-        .saturating_sub(spent)
-        .saturating_sub(reserve)
-        .as_secs_f64()
-        * 1e6;
-    // At least a sixteenth of the budget goes to tests, whatever the overhead: without tests
-    // nothing ever settles (and pairs that stopped moving cannot be cached).
-    let tests_us = (left_us - all as f64 * costs.memory_us).max(budget.as_secs_f64() * 0.0625e6);
-    let count = ((tests_us / costs.test_us.max(1e-3)) as usize).min(testable);
-    (count, now + Duration::from_secs_f64(tests_us * 1e-6))
-}
-
-/// Marks the jobs tested in this run: every testable exact job, and the optional ones above
-/// the `cut` (all of them without a cut; within the cut's bucket the first in pair order).
-pub(crate) fn choose_tests(jobs: &mut [Job], cut: Option<(u8, usize)>) -> Chosen {
+/// Marks the jobs tested in this run: every testable exact job and, of the optional ones,
+/// all of them (`fit` is `None`) or `fit = Some((count, per_bucket))` of them: a quarter of
+/// `count` to the pairs that waited longest for a test (ties in job order), the rest from
+/// the highest priority down (within the last bucket taken, in job order). The quarter for
+/// the longest waiting is what keeps a pair of low priority from starving when pairs of high
+/// priority fill every run: with `k` tests per run among `n` pairs, none waits much more than
+/// `4n/k` runs. `oldest` is scratch.
+pub(crate) fn choose_tests(
+    jobs: &mut [Job],
+    fit: Option<(usize, [u32; BUCKETS])>,
+    oldest: &mut Vec<(u32, u32)>,
+) -> Chosen {
     let mut chosen = Chosen::default();
-    let mut taken_at_cut = 0;
     for j in jobs.iter_mut() {
-        j.chosen = j.testable()
-            && (j.method == Method::Exact
-                || match cut {
-                    None => true,
-                    Some((bucket, _)) if j.bucket < bucket => true,
-                    Some((bucket, room)) if j.bucket == bucket && taken_at_cut < room => {
-                        taken_at_cut += 1;
-                        true
-                    }
-                    Some(_) => false,
-                });
-        if j.chosen {
-            chosen.count += 1;
-            if j.method == Method::Adb {
-                chosen.adb += 1;
-                chosen.adb_priority += f64::from(j.priority);
-            }
+        j.chosen = j.testable() && (j.method == Method::Exact || fit.is_none());
+    }
+    if let Some((count, mut per_bucket)) = fit {
+        // The longest waiting first.
+        oldest.clear();
+        oldest.extend(
+            (0..jobs.len() as u32)
+                .filter(|&i| jobs[i as usize].optional() && jobs[i as usize].stale > 0)
+                .map(|i| (jobs[i as usize].stale, i)),
+        );
+        let quarter = (count / 4).min(oldest.len());
+        let longest = |x: &(u32, u32), y: &(u32, u32)| y.0.cmp(&x.0).then(x.1.cmp(&y.1));
+        if quarter < oldest.len() && quarter > 0 {
+            oldest.select_nth_unstable_by(quarter - 1, longest);
+        }
+        for &(_, i) in &oldest[..quarter] {
+            let j = &mut jobs[i as usize];
+            j.chosen = true;
+            per_bucket[usize::from(j.bucket)] -= 1;
+        }
+        // Then by priority.
+        let (bucket, room) = priority_cut(&per_bucket, count - quarter);
+        let mut taken_at_cut = 0;
+        for j in jobs.iter_mut().filter(|j| j.optional() && !j.chosen) {
+            j.chosen = j.bucket < bucket || (j.bucket == bucket && taken_at_cut < room);
+            taken_at_cut += usize::from(j.chosen && j.bucket == bucket);
+        }
+    }
+    for j in jobs.iter().filter(|j| j.chosen) {
+        chosen.count += 1;
+        if j.method == Method::Adb {
+            chosen.adb += 1;
+            chosen.adb_priority += f64::from(j.priority);
         }
     }
     chosen
@@ -316,22 +316,46 @@ mod tests {
         assert_eq!(plan.testable, 5);
         assert_eq!(plan.optional.iter().sum::<u32>(), 4);
         assert_eq!(plan.adb, 4, "ADB jobs that need a test");
-        // Two optional tests fit: the 8.0 job and the first 2.0 job (pair order in a bucket).
-        let cut = priority_cut(&plan.optional, 2);
-        let c = choose_tests(&mut jobs, Some(cut));
+        // Two optional tests fit, none waited: the 8.0 job and the first 2.0 job (job order
+        // in a bucket).
+        let scratch = &mut Vec::new();
+        let c = choose_tests(&mut jobs, Some((2, plan.optional)), scratch);
         assert_eq!(chosen(&jobs), vec![1, 2, 5]);
         assert_eq!((c.count, c.adb, c.adb_priority), (3, 2, 10.0));
         // No cut (work budgets): every testable job.
-        assert_eq!(choose_tests(&mut jobs, None).count, 5);
+        assert_eq!(choose_tests(&mut jobs, None, scratch).count, 5);
         assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
         // Nothing fits: the exact job still.
-        let cut = priority_cut(&plan.optional, 0);
-        choose_tests(&mut jobs, Some(cut));
+        choose_tests(&mut jobs, Some((0, plan.optional)), scratch);
         assert_eq!(chosen(&jobs), vec![1]);
         // More than there are: all of them.
-        let cut = priority_cut(&plan.optional, 100);
-        choose_tests(&mut jobs, Some(cut));
+        choose_tests(&mut jobs, Some((100, plan.optional)), scratch);
         assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);
+    }
+
+    #[test]
+    fn a_quarter_of_the_tests_go_to_the_longest_waiting() {
+        // Eight urgent pairs, tested every run, and one of low priority that waited long.
+        let mut jobs: Vec<Job> = (0..8).map(|_| job(Method::Adb, 8.0, false)).collect();
+        jobs.push(Job {
+            stale: 30,
+            ..job(Method::Adb, 0.1, false)
+        });
+        jobs.push(Job {
+            stale: 3,
+            ..job(Method::Adb, 0.1, false)
+        });
+        let plan = PlanCounts::count(&jobs);
+        let scratch = &mut Vec::new();
+        // Four tests: one for the longest waiting, three by priority.
+        choose_tests(&mut jobs, Some((4, plan.optional)), scratch);
+        assert_eq!(chosen(&jobs), vec![0, 1, 2, 8]);
+        // Eight tests: two for the longest waiting, six by priority.
+        choose_tests(&mut jobs, Some((8, plan.optional)), scratch);
+        assert_eq!(chosen(&jobs), vec![0, 1, 2, 3, 4, 5, 8, 9]);
+        // Fewer than four: by priority only.
+        choose_tests(&mut jobs, Some((3, plan.optional)), scratch);
+        assert_eq!(chosen(&jobs), vec![0, 1, 2]);
     }
 
     #[test]
@@ -366,25 +390,5 @@ mod tests {
         assert!(cached(3), "changed in the test's run (before it)");
         // Changed in run 4: in every run after it too, the answer is not reused as it is.
         assert!(!cached(4));
-    }
-
-    #[test]
-    fn the_tests_that_fit_follow_the_measured_costs() {
-        let diag = CollisionDiagnostics::default();
-        let costs = PairCosts {
-            test_us: 2.0,
-            memory_us: 0.1,
-        };
-        let now = diag.frame_start;
-        // 2000 µs, 5000 pairs answered at 0.1 µs: 1500 µs for tests of 2 µs.
-        let budget = Duration::from_micros(2000);
-        let (count, deadline) = tests_that_fit(budget, 10_000, 5000, &diag, &costs, now);
-        assert_eq!(count, 750);
-        assert_eq!(deadline - now, Duration::from_micros(1500));
-        // Never more than the testable ones.
-        assert_eq!(tests_that_fit(budget, 10, 5000, &diag, &costs, now).0, 10);
-        // Overhead beyond the budget: a sixteenth of it still goes to tests.
-        let (count, _) = tests_that_fit(budget, 10_000, 50_000, &diag, &costs, now);
-        assert_eq!(count, 62);
     }
 }

@@ -3,8 +3,8 @@
 use bevy_ecs::prelude::*;
 use bevy_ecs::system::SystemParam;
 
+use super::super::budget::BudgetController;
 use super::super::contact::ContactPoint;
-use super::super::diagnostics::CollisionDiagnostics;
 use super::super::narrow_phase::{Method, PairOutcome, decayed_probability};
 use super::super::prepare::ColliderTable;
 use super::super::stamp::stamp;
@@ -51,7 +51,7 @@ use super::table::{PairEnds, PairHot, PairSlot, PairTable};
 pub struct CollisionPairs<'w> {
     pairs: Res<'w, PairTable>,
     colliders: Res<'w, ColliderTable>,
-    diagnostics: Res<'w, CollisionDiagnostics>,
+    budget: Res<'w, BudgetController>,
 }
 
 impl<'w> CollisionPairs<'w> {
@@ -69,7 +69,7 @@ impl<'w> CollisionPairs<'w> {
     /// Every pair `entity` is in (touching or not; `(entity, entity)` for a self-colliding
     /// mesh).
     pub fn of(&self, entity: Entity) -> impl Iterator<Item = PairView<'_>> {
-        let run = self.diagnostics.frame;
+        let run = self.budget.run();
         self.colliders
             .get(entity)
             .into_iter()
@@ -85,7 +85,7 @@ impl<'w> CollisionPairs<'w> {
 
     /// Every pair, in a stable order.
     pub fn iter(&self) -> impl Iterator<Item = PairView<'_>> {
-        let run = self.diagnostics.frame;
+        let run = self.budget.run();
         (0..self.pairs.slots.len() as u32)
             .filter(|&p| self.pairs.ends(p).live && !self.pairs.ends(p).excluded)
             .map(move |p| self.view(p, run))

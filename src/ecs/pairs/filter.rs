@@ -8,7 +8,7 @@ use bevy_ecs::system::{ReadOnlySystemParam, StaticSystemParam, SystemParamItem};
 use bevy_reflect::prelude::*;
 
 use super::super::broad_phase::update_broad_phase;
-use super::super::diagnostics::CollisionDiagnostics;
+use super::super::budget::BudgetController;
 use super::super::prepare::ColliderTable;
 use super::super::schedule::{CollisionSchedule, CollisionSystems};
 use super::table::PairTable;
@@ -132,12 +132,12 @@ pub fn filter_pairs<F: PairFilter + 'static>(
     filter: StaticSystemParam<F>,
     mut pairs: ResMut<PairTable>,
     colliders: Res<ColliderTable>,
-    diag: Res<CollisionDiagnostics>,
+    budget: Res<BudgetController>,
     mut refilter: MessageReader<RefilterPairs>,
 ) where
     for<'w, 's> SystemParamItem<'w, 's, F>: PairFilter,
 {
-    let run = diag.frame;
+    let run = budget.run();
     let pairs = &mut *pairs;
     let mut asked = std::mem::take(&mut pairs.created);
     for &body in colliders.changed() {

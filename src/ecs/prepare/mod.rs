@@ -7,7 +7,6 @@ mod transforms;
 mod world_box;
 
 use std::sync::{Arc, LazyLock};
-use std::time::Instant;
 
 use bevy_ecs::entity::EntityHashSet;
 use bevy_ecs::prelude::*;
@@ -42,12 +41,13 @@ pub(crate) fn place(pose: &mut ColliderPose, _: &mut (), _: &Parents, world: Pos
 use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;
 
+use super::budget::BudgetController;
 use super::components::{
     ColliderPose, ColliderScale, ContinuousCollision, Deformable, Fidelity, MeshCollider,
     SelfCollision,
 };
 use super::config::CollisionConfig;
-use super::diagnostics::{CollisionDiagnostics, Stage, begin_frame};
+use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::events::{CollisionError, CollisionErrorKind};
 use super::layers::ContactLayers;
 use super::pool::CollisionTaskPool;
@@ -117,12 +117,13 @@ pub fn refit_deformables(
     mut q: Query<(Entity, &mut Deformable, Option<&ColliderScale>)>,
     mut table: ResMut<ColliderTable>,
     pool: Res<CollisionTaskPool>,
+    mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
     // The first system of a run when it runs (a deformable mesh has new positions).
-    begin_frame(&mut diag);
-    diag.begun_by_refit = true;
-    let start = Instant::now();
+    let run = budget.begin_run(true);
+    diag.begin_run(run);
+    let start = budget.now();
     let mut stale: Vec<(Entity, Mut<Deformable>, Vec3, Option<MeshError>)> = q
         .iter_mut()
         .filter(|(_, d, scale)| needs_refit(d, *scale))
@@ -155,7 +156,8 @@ pub fn refit_deformables(
     for (_, d, _, err) in &mut stale {
         d.broken = err.take();
     }
-    diag.record(Stage::Refit, start.elapsed(), stale.len() as u64);
+    let time = budget.stage_done(Stage::Refit, start);
+    diag.record(Stage::Refit, time, stale.len() as u64);
 }
 
 /// What a collider's components say.
@@ -204,13 +206,12 @@ pub fn update_colliders(
     mut table: ResMut<ColliderTable>,
     mut state: ResMut<PrepareState>,
     mut errors: MessageWriter<CollisionError>,
+    mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
 ) {
-    if !std::mem::take(&mut diag.begun_by_refit) {
-        begin_frame(&mut diag);
-    }
-    let start = Instant::now();
-    let run = diag.frame;
+    let run = budget.begin_run(false);
+    diag.begin_run(run);
+    let start = budget.now();
     table.begin_run(run);
     let full = config.is_changed();
     let state = &mut *state;
@@ -250,7 +251,8 @@ pub fn update_colliders(
     again.clear();
     changes.removed.entities = again;
     let items = table.changed().len() as u64;
-    diag.record(Stage::Prepare, start.elapsed(), items);
+    let time = budget.stage_done(Stage::Prepare, start);
+    diag.record(Stage::Prepare, time, items);
 }
 
 /// One run's updates of the table.

@@ -6,7 +6,6 @@ use std::collections::HashMap;
 
 use bevy_ecs::entity::EntityHashSet;
 use std::sync::{Arc, Weak};
-use std::time::Instant;
 
 use bevy_app::prelude::*;
 use bevy_ecs::intern::Interned;
@@ -17,6 +16,7 @@ use bevy_reflect::prelude::*;
 use bevy_time::Time;
 use glam::{Mat3, Quat, Vec3};
 
+use super::super::budget::BudgetController;
 use super::super::components::{ColliderPose, ColliderScale, Deformable, MeshCollider};
 use super::super::config::CollisionConfig;
 use super::super::diagnostics::{CollisionDiagnostics, Stage};
@@ -306,14 +306,15 @@ pub fn impulse_response(
     mut bodies: Query<BodyData>,
     deformables: Query<(), With<Deformable>>,
     parents: Parents,
+    mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
     mut rewound: Local<EntityHashSet>,
 ) {
-    let start = Instant::now();
+    let start = budget.now();
     // Contacts approaching slower than gravity accelerates in two steps are resting: no bounce.
     let dt = settings.step(time.as_deref());
     let resting_speed = 2.0 * settings.gravity.length() * dt;
-    let run = diag.frame;
+    let run = budget.run();
     rewound.clear();
     let n = queue.consume(|c| {
         if c.a == c.b || deformables.contains(c.a) || deformables.contains(c.b) {
@@ -331,7 +332,8 @@ pub fn impulse_response(
         }
         true
     });
-    diag.record(Stage::Response, start.elapsed(), n as u64);
+    let time = budget.stage_done(Stage::Response, start);
+    diag.record(Stage::Response, time, n as u64);
 }
 
 /// What the impulse response reads and writes of a body.

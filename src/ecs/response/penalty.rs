@@ -1,6 +1,5 @@
 //! The penalty response for deformable meshes: contact triangles' vertices pushed apart, each
 //! contact's correction spread to its corners by barycentric weights.
-use std::time::Instant;
 
 use bevy_app::prelude::*;
 use bevy_ecs::entity::EntityHashMap;
@@ -10,6 +9,7 @@ use bevy_ecs::schedule::ScheduleLabel;
 use bevy_reflect::prelude::*;
 use glam::Vec3;
 
+use super::super::budget::BudgetController;
 use super::super::components::{ColliderPose, ColliderScale, Deformable};
 use super::super::diagnostics::{CollisionDiagnostics, Stage};
 use super::super::events::ContactQueue;
@@ -182,11 +182,12 @@ pub fn penalty_response(
         &ColliderPose,
         Option<&ColliderScale>,
     )>,
+    mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
     mut state: Local<PenaltyState>,
 ) {
-    let start = Instant::now();
-    let run = diag.frame;
+    let start = budget.now();
+    let run = budget.run();
     let state = &mut *state;
     let (previous, pending) = (&state.previous, &mut state.pending);
     let n = queue.consume(|c| {
@@ -279,7 +280,8 @@ pub fn penalty_response(
     }
     state.previous.retain(|_, s| s.run == run);
     state.pending.retain(|e, _| state.previous.contains_key(e));
-    diag.record(Stage::Response, start.elapsed(), n as u64);
+    let time = budget.stage_done(Stage::Response, start);
+    diag.record(Stage::Response, time, n as u64);
 }
 
 #[cfg(test)]

@@ -1,4 +1,4 @@
-//! Sharing the frame budget among pairs: priorities, slices, the measured work rate, seeds.
+//! Sharing the frame budget among pairs: priorities, node-pair slices, per-pair seeds.
 use bevy_ecs::entity::Entity;
 use glam::{Vec3, Vec3A};
 
@@ -80,32 +80,6 @@ fn splitmix(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
-}
-
-/// What the budget learns from earlier runs (time mode): node pairs per microsecond of test
-/// wall-clock time, as a moving average.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct WorkRate {
-    pub node_pairs_per_us: f64,
-}
-
-impl Default for WorkRate {
-    fn default() -> Self {
-        Self {
-            node_pairs_per_us: 20.0,
-        }
-    }
-}
-
-impl WorkRate {
-    /// Folds in one run: `node_pairs` visited in `us` microseconds of tests.
-    pub fn update(&mut self, node_pairs: u64, us: f64) {
-        if us <= 1.0 || node_pairs == 0 {
-            return;
-        }
-        let rate = node_pairs as f64 / us;
-        self.node_pairs_per_us = 0.8 * self.node_pairs_per_us + 0.2 * rate;
-    }
 }
 
 #[cfg(test)]
