@@ -37,6 +37,17 @@
 //! 6. **Response**: the built-in [`ImpulseResponsePlugin`] and [`PenaltyResponsePlugin`], or
 //!    your own systems, consuming contacts by priority within the response budget.
 //!
+//! What each stage reads and writes (the modules are named after the stages):
+//!
+//! | set | systems | reads | writes |
+//! |---|---|---|---|
+//! | Prepare (`prepare/`) | `sync_transforms`, `refit_deformables`, `update_colliders` | `Transform`s, the collider components that changed ([`RemovedColliders`] for removals) | [`ColliderTable`], [`CollisionError`] |
+//! | BroadPhase (`broad_phase/`) | `update_broad_phase`, then `filter_pairs` with a [`PairFilter`] | the colliders that changed | fat boxes ([`BroadPhaseState`]), pairs created and removed in the [`PairTable`] |
+//! | NarrowPhase (`narrow_phase/`) | `narrow_phase` | the active pairs, the [`BudgetController`]'s plan | answers, memory and transitions in the [`PairTable`] |
+//! | Tracking (`tracking/`) | `self_collision`, `track_pairs`, `prune_feature_pairs`, `forget_untracked` | the tracked pairs | answers in the [`PairTable`], [`TrackingState`], [`FeaturePairs`] |
+//! | Report (`events.rs`) | `report_collisions` | transitions and this run's contacts | [`CollisionStarted`], [`CollisionEnded`], [`Contact`], [`TouchingEntities`], observer events, the [`ContactQueue`] |
+//! | Response (`response/`) | the built-in responses, yours | the [`ContactQueue`] within the [`ResponseBudget`] | `Transform`s, velocities, deformable positions |
+//!
 //! One [`BudgetController`] times every stage with its clock (the system clock, or a
 //! [`FakeClock`] a test moves) and plans each run under a [`FrameBudget::Time`] budget from
 //! what it measured: what Prepare and BroadPhase took, what Tracking and Report took last
@@ -73,9 +84,9 @@ mod events;
 mod layers;
 mod narrow_phase;
 mod pairs;
+mod parallel;
 mod plugin;
 mod plugin_group;
-mod pool;
 mod prepare;
 mod reflect;
 mod response;
@@ -107,26 +118,25 @@ pub use debug_render::{
 #[cfg(feature = "diagnostic")]
 pub use diagnostics::store as diagnostics_store;
 pub use diagnostics::{CollisionCounters, CollisionDiagnostics, Stage, StageRecord};
-pub use events::{
-    CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact, ContactQueue,
-};
+pub use events::{CollisionEnded, CollisionError, CollisionErrorKind, CollisionStarted, Contact};
 pub use layers::{ContactLayer, ContactLayers};
 pub use narrow_phase::{Method, NarrowPhaseState, PairOutcome};
 pub use pairs::{
     CollisionPairs, PairFilter, PairFilterPlugin, PairTable, PairView, RefilterPairs, filter_pairs,
 };
+pub use parallel::CollisionTaskPool;
 pub use plugin::StochasticCollisionPlugin;
 pub use plugin_group::StochasticCollisionPlugins;
-pub use pool::CollisionTaskPool;
 pub use prepare::{ColliderEntry, ColliderTable, Geometry, PrepareState, RemovedColliders};
 pub use reflect::{
     DecisionReflect, OptionTrianglePairReflect, OrderReflect, PoseReflect, TrianglePairReflect,
     register_response_types, register_types,
 };
 pub use response::{
-    BodyAngularVelocity, BodyInertia, BodyMass, BodyVelocity, DEFAULT_STEP, ImpulseResponsePlugin,
-    ImpulseSettings, InertiaSource, PenaltyResponsePlugin, PenaltySettings, Rest, impulse_response,
-    integrate_velocities, penalty_response, sleep_bodies, update_body_inertia,
+    BodyAngularVelocity, BodyInertia, BodyMass, BodyVelocity, ContactQueue, DEFAULT_STEP,
+    ImpulseResponsePlugin, ImpulseSettings, InertiaSource, PenaltyResponsePlugin, PenaltySettings,
+    Rest, impulse_response, integrate_velocities, penalty_response, sleep_bodies,
+    update_body_inertia,
 };
 pub use schedule::{CollisionSchedule, CollisionSystems};
 pub use tracking::{FeaturePairs, TrackingState};

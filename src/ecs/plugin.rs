@@ -8,16 +8,15 @@ use super::broad_phase::{BroadPhaseState, update_broad_phase};
 use super::budget::BudgetController;
 use super::config::CollisionConfig;
 use super::diagnostics::CollisionDiagnostics;
-use super::events::{
-    CollisionEnded, CollisionError, CollisionStarted, Contact, ContactQueue, report_collisions,
-};
+use super::events::{CollisionEnded, CollisionError, CollisionStarted, Contact, report_collisions};
 use super::narrow_phase::{NarrowPhaseState, narrow_phase};
 use super::pairs::PairTable;
-use super::pool::CollisionTaskPool;
+use super::parallel::CollisionTaskPool;
 use super::prepare::{
     ColliderTable, PrepareState, RemovedColliders, note_removed, refit_deformables,
     update_colliders,
 };
+use super::response::ContactQueue;
 use super::schedule::{CollisionSchedule, CollisionSystems};
 use super::tracking::{
     FeaturePairs, TrackingState, forget_untracked, holds_tracking_state, needs_self_pass,

@@ -24,7 +24,7 @@ use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::layers::ContactLayers;
 use super::pairs::PairTable;
-use super::pool::CollisionTaskPool;
+use super::parallel::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderTable};
 use super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::geometry::Aabb;

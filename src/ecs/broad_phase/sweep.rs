@@ -2,7 +2,7 @@
 //! or, when few moved, a windowed search of the boxes kept sorted along one axis.
 use super::super::layers::ContactLayers;
 use super::super::pairs::PairTable;
-use super::super::pool::CollisionTaskPool;
+use super::super::parallel::CollisionTaskPool;
 use super::super::prepare::ColliderTable;
 use super::super::stamp::stamp;
 use super::{BroadPhaseState, linked};

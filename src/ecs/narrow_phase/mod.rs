@@ -26,7 +26,7 @@ use super::budget::{BudgetController, SliceShare, TestsDone};
 use super::config::{CollisionConfig, FrameBudget};
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::pairs::{PairEnds, PairTable};
-use super::pool::CollisionTaskPool;
+use super::parallel::CollisionTaskPool;
 use super::prepare::ColliderTable;
 use super::stamp::stamp;
 use execute::{Answer, ChunkWork, Context, Deadlines, RunCounts};

@@ -50,7 +50,7 @@ use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::events::{CollisionError, CollisionErrorKind};
 use super::layers::ContactLayers;
-use super::pool::CollisionTaskPool;
+use super::parallel::CollisionTaskPool;
 use crate::bvh::CollisionMesh;
 use crate::geometry::{Aabb, Pose};
 use crate::mesh::{MeshError, TriMesh};

@@ -42,6 +42,7 @@
 mod body;
 mod impulse;
 mod penalty;
+mod queue;
 
 use bevy_app::prelude::*;
 use bevy_ecs::intern::Interned;
@@ -53,6 +54,7 @@ pub use impulse::{
     sleep_bodies, update_body_inertia,
 };
 pub use penalty::{PenaltyResponsePlugin, PenaltySettings, penalty_response};
+pub use queue::ContactQueue;
 
 use super::schedule::CollisionSchedule;
 

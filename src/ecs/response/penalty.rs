@@ -12,8 +12,8 @@ use glam::Vec3;
 use super::super::budget::BudgetController;
 use super::super::components::{ColliderPose, ColliderScale, Deformable};
 use super::super::diagnostics::{CollisionDiagnostics, Stage};
-use super::super::events::ContactQueue;
 use super::super::schedule::CollisionSystems;
+use super::queue::ContactQueue;
 use super::response_schedule;
 use crate::geometry::{Pose, barycentric_weights, spread_to_corners};
 

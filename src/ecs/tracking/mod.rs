@@ -27,7 +27,7 @@ use super::contact::triangle_pair_contact;
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::narrow_phase::{Method, PairOutcome, spread, with_workspaces};
 use super::pairs::PairTable;
-use super::pool::CollisionTaskPool;
+use super::parallel::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderTable};
 use crate::bvh::self_intersections;
 

@@ -10,7 +10,7 @@ use smallvec::SmallVec;
 
 use super::super::components::Fidelity;
 use super::super::contact::ContactPoint;
-use super::super::pool::CollisionTaskPool;
+use super::super::parallel::CollisionTaskPool;
 use super::super::prepare::{ColliderEntry, ColliderTable, Geometry};
 use crate::bvh::{CollisionMesh, TrianglePair};
 use crate::geometry::Pose;
