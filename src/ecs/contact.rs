@@ -124,9 +124,10 @@ fn meeting_point(ta: &[Vec3; 3], tb: &[Vec3; 3]) -> Vec3 {
 }
 
 /// The contact of an intersecting triangle pair: point in the middle of the segment where
-/// they cross (see `meeting_point`), normal of the reference face: between an open and a
-/// closed mesh, the open one's triangle turned towards the closed one's centre (the closed
-/// one's outward normal when that centre lies in the plane); else the larger triangle (as in
+/// they cross (see `meeting_point`), normal of the reference face: between an open mesh and a
+/// closed one no larger than it, the open one's triangle turned towards the closed one's
+/// centre (the closed one's outward normal when that centre lies in the plane); between an open
+/// mesh and a larger closed one, the closed one's outward normal; else the larger triangle (as in
 /// box-box manifolds: a face meeting an edge or a corner; outward normals of closed meshes push
 /// the second along the first's normal and against its own), depth of the deeper triangle behind the other's plane (the
 /// smaller of the two, so a huge triangle's far corners do not count).
@@ -142,12 +143,22 @@ pub(crate) fn triangle_pair_contact(
     let (ca, cb) = (centroid(&ta), centroid(&tb));
     let (na, nb) = (unit_normal(&ta), unit_normal(&tb));
     let area = |t: &[Vec3; 3]| (t[1] - t[0]).cross(t[2] - t[0]).length_squared();
+    let size = |m: &CollisionMesh| m.bvh().root_aabb().extents().length_squared();
     let mut normal = match (a.is_closed(), b.is_closed()) {
-        // An open mesh's face normals can point either way (a sheet has no outside): against
-        // a closed mesh, its face normal turned towards the closed mesh's centre (push the
-        // closed one away from the sheet to the side where its bulk is).
-        (false, true) => open_face_normal(na, b, pose_b, ca, 1.0).unwrap_or(-nb),
-        (true, false) => open_face_normal(nb, a, pose_a, cb, -1.0).unwrap_or(na),
+        // An open mesh's face normals can point either way (a sheet has no outside). Against a
+        // closed mesh no larger than it (a ball on a sheet), its face normal turned towards
+        // the closed mesh's centre: the closed one is pushed off the sheet to the side where
+        // its bulk is. Against a larger closed mesh (an open body on a floor), the closed
+        // one's outward normal: the centre of a floor's box says nothing about which way is
+        // out where a small body touches it.
+        (false, true) if size(a) >= size(b) => {
+            open_face_normal(na, b, pose_b, ca, 1.0).unwrap_or(-nb)
+        }
+        (false, true) => -nb,
+        (true, false) if size(b) >= size(a) => {
+            open_face_normal(nb, a, pose_a, cb, -1.0).unwrap_or(na)
+        }
+        (true, false) => na,
         _ if area(&ta) >= area(&tb) => na,
         _ => -nb,
     };
@@ -308,5 +319,40 @@ mod tests {
         ];
         let c = meeting_point(&floor, &flat);
         assert!((c - centroid(&flat)).length() < 1e-6);
+    }
+
+    #[test]
+    fn an_open_body_on_a_large_closed_floor_is_pushed_up() {
+        use crate::mesh::{TriMesh, generate};
+        // A wide closed floor slab (top at y = 0) and a small open bowl (a box without its
+        // top) sunk a little into it, far from the floor's centre.
+        let floor = CollisionMesh::new(generate::cuboid(Vec3::new(10.0, 0.5, 10.0), 4));
+        let floor_pose = Pose::from_translation(Vec3::new(0.0, -0.5, 0.0));
+        let cube = generate::cuboid(Vec3::splat(0.2), 1);
+        let (p, t) = (cube.positions(), cube.triangles());
+        // Keep every triangle but those of the top face (all three corners at y = +0.2).
+        let bowl: Vec<[u32; 3]> = t
+            .iter()
+            .copied()
+            .filter(|tri| !tri.iter().all(|&i| p[i as usize].y > 0.1))
+            .collect();
+        let bowl = CollisionMesh::new(TriMesh::new(p.to_vec(), bowl).expect("a valid mesh"));
+        assert!(floor.is_closed() && !bowl.is_closed());
+        let bowl_pose = Pose::from_translation(Vec3::new(7.0, 0.19, 3.0));
+        let mut pairs = Vec::new();
+        let mut ws = crate::bvh::QueryWorkspace::default();
+        crate::bvh::intersecting_pairs(&floor, &floor_pose, &bowl, &bowl_pose, &mut ws, &mut pairs);
+        assert!(!pairs.is_empty());
+        for &pair in &pairs {
+            // The floor's outward normal pushes the bowl up, whichever way its faces point.
+            let c = triangle_pair_contact(&floor, &floor_pose, &bowl, &bowl_pose, pair);
+            assert!(c.normal.dot(Vec3::Y) > 0.99, "{:?}", c.normal);
+            let swapped = TrianglePair {
+                a: pair.b,
+                b: pair.a,
+            };
+            let c = triangle_pair_contact(&bowl, &bowl_pose, &floor, &floor_pose, swapped);
+            assert!(c.normal.dot(Vec3::Y) < -0.99, "{:?}", c.normal);
+        }
     }
 }
