@@ -9,11 +9,18 @@
 //! cloth exactly, and [`push_balls`] turns each contact into a change of the ball's
 //! `LinearVelocity` and `Position`; `PenaltyResponsePlugin` pushes the cloth's vertices down and
 //! [`relax_cloth`] lets the cloth spring back towards its rest shape.
+//!
+//! [`pile`] builds the main crate's pile scene (rigid meshes falling into a box) for both this
+//! crate and avian3d, with the same triangles as trimesh colliders everywhere, and times each
+//! side's collision stages per step; the `pile_vs_avian` example compares them over the falling
+//! phase (`docs/plugin/avian_pile.sh` runs it, its output is `docs/plugin/runs/avian_pile.txt`).
 use avian3d::prelude::*;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
 use stochastic_collision::ecs::{PenaltySettings, penalty_response};
 use stochastic_collision::prelude::*;
+
+pub mod pile;
 
 /// Balls dropped on the cloth.
 pub const BALLS: usize = 9;
