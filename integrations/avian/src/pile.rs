@@ -115,12 +115,9 @@ pub fn shared_mesh_dir() -> PathBuf {
 pub fn normalized(mesh: &TriMesh, size: f32) -> TriMesh {
     let b = mesh.aabb();
     let s = size / b.extents().max_element().max(1e-6);
-    let positions = mesh
-        .positions()
-        .iter()
-        .map(|p| (*p - b.center()) * s)
-        .collect();
-    TriMesh::new(positions, mesh.triangles().to_vec()).expect("scaling keeps a valid mesh")
+    mesh.translated(-b.center())
+        .and_then(|m| m.scaled(Vec3::splat(s)))
+        .expect("moving and scaling keep a valid mesh")
 }
 
 impl PileScene {

@@ -10,8 +10,9 @@ use std::time::{Duration, Instant};
 /// The default is [`SystemClock`]. A test installs a [`FakeClock`] with
 /// [`BudgetController::set_clock`](super::BudgetController::set_clock) and moves it by hand, to
 /// drive the controller through overload and recovery without depending on the machine's
-/// speed. The core queries that stop at a deadline (an ADB traversal's node cap, a tracker's
-/// search) are given that deadline as an `Instant` of this clock.
+/// speed. The narrow phase's tests (their deadlines and an ADB traversal's node cap) read this
+/// clock; a tracker's search is given its deadline as an `Instant` of this clock but compares
+/// it with the system clock, so under a `FakeClock` its cut follows real time.
 pub trait BudgetClock: Send + Sync + fmt::Debug + 'static {
     /// The current time.
     fn now(&self) -> Instant;
