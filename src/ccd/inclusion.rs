@@ -51,7 +51,8 @@ pub(crate) struct Tolerances {
 }
 
 /// The earliest time in `[0, t_limit)` at which `F` comes within `δ` of zero (see the module
-/// documentation), or `None`.
+/// documentation), or `None`, searched within `window`, which must hold every such time
+/// (outside it the features are known to be more than `δ` apart).
 ///
 /// A depth-first branch and bound: the earlier half of a box is searched first, a box kept
 /// (small enough, and not excluded) lowers the bound, boxes are cut at the bound and those
@@ -60,13 +61,14 @@ pub(crate) struct Tolerances {
 pub(crate) fn earliest_root<F: Fn(f64, f64, f64) -> DVec3>(
     problem: &Problem<F>,
     tol: &Tolerances,
+    window: (f64, f64),
     t_limit: f64,
     stack: &mut Vec<Cell>,
 ) -> Option<f64> {
     stack.clear();
     stack.push(Cell {
-        lo: [0.0, 0.0, 0.0],
-        hi: [1.0, 1.0, 1.0],
+        lo: [window.0.max(0.0), 0.0, 0.0],
+        hi: [window.1.min(1.0), 1.0, 1.0],
     });
     let mut limit = t_limit;
     let mut found = None;
@@ -179,11 +181,11 @@ mod tests {
             },
             simplex: true,
         };
-        let t = earliest_root(&problem, &tol(), 1.0, &mut Vec::new()).unwrap();
+        let t = earliest_root(&problem, &tol(), (0.0, 1.0), 1.0, &mut Vec::new()).unwrap();
         assert!((t - 0.5).abs() < 1e-6, "{t}");
         assert!(t <= 0.5);
         // Not before a limit earlier than the root.
-        assert!(earliest_root(&problem, &tol(), 0.4, &mut Vec::new()).is_none());
+        assert!(earliest_root(&problem, &tol(), (0.0, 1.0), 0.4, &mut Vec::new()).is_none());
     }
 
     #[test]
@@ -195,6 +197,6 @@ mod tests {
             },
             simplex: true,
         };
-        assert!(earliest_root(&problem, &tol(), 1.0, &mut Vec::new()).is_none());
+        assert!(earliest_root(&problem, &tol(), (0.0, 1.0), 1.0, &mut Vec::new()).is_none());
     }
 }

@@ -11,17 +11,21 @@
 //! Every pair of features whose swept boxes meet is decided by an inclusion-based root finder
 //! that never misses a root: the answer is never later than the first contact, and no earlier
 //! than the last moment the features were more than a stated distance tolerance apart (see
-//! [`CcdOptions`]). Both trees are descended together over the boxes their nodes sweep.
+//! [`CcdOptions`]). Both trees are descended together, node pairs in the order of the earliest
+//! time their moving boxes can meet, and each feature pair is searched only over the times its
+//! own moving boxes meet.
 //!
-//! The plugin does not call these queries yet; call them from a system of your own for the
-//! bodies that move far in one step.
+//! The plugin calls [`time_of_impact`] for colliders marked
+//! [`ContinuousCollision`](crate::ecs::ContinuousCollision).
 //!
 //! Next: [`crate::ecs`], the Bevy plugin that runs the discrete queries every step.
 
+mod descent;
 mod inclusion;
 mod primitive;
 mod query;
 mod swept;
+mod window;
 
 pub use primitive::{
     CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,

@@ -5,6 +5,7 @@
 use glam::DVec3;
 
 use super::inclusion::{Cell, Problem, Tolerances, earliest_root};
+use super::window::{MovingBox, overlap_window};
 
 /// A point's positions at the start and the end of the step.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -32,14 +33,6 @@ impl Trajectory {
     #[inline]
     pub fn at(&self, t: f64) -> DVec3 {
         self.start + t * (self.end - self.start)
-    }
-
-    fn lo(&self) -> DVec3 {
-        self.start.min(self.end)
-    }
-
-    fn hi(&self) -> DVec3 {
-        self.start.max(self.end)
     }
 }
 
@@ -77,16 +70,30 @@ impl PrimitiveTolerances {
     }
 }
 
-/// Whether the boxes swept by two groups of points, grown by `margin`, overlap.
-fn swept_boxes_overlap(a: &[Trajectory], b: &[Trajectory], margin: f64) -> bool {
-    let bounds = |ps: &[Trajectory]| {
-        ps.iter().fold(
-            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(p.lo()), hi.max(p.hi())),
-        )
-    };
-    let ((alo, ahi), (blo, bhi)) = (bounds(a), bounds(b));
-    (alo - DVec3::splat(margin)).cmple(bhi).all() && (blo - DVec3::splat(margin)).cmple(ahi).all()
+/// Whether the features stay on one side of the plane through them for all of `window`, farther
+/// than `delta` in the max norm: a cheap proof that they do not meet there. `e1`, `e2` span the
+/// plane (the face's edges, or the two edges' directions) and `d` goes from the plane's point to
+/// the other feature; all move linearly, so `n = e1 × e2` is quadratic in time and `f = n · d`
+/// cubic, and their Bernstein coefficients over the window bound them. Where `|f| / |n|`, the
+/// distance from the plane, exceeds `√3 δ` (a Euclidean distance that large is more than `δ` in
+/// every max-norm sense) for all of the window, the features are apart.
+fn apart_from_plane(e1: [DVec3; 2], e2: [DVec3; 2], d: [DVec3; 2], delta: f64) -> bool {
+    let n = [
+        e1[0].cross(e2[0]),
+        0.5 * (e1[0].cross(e2[1]) + e1[1].cross(e2[0])),
+        e1[1].cross(e2[1]),
+    ];
+    let f = [
+        n[0].dot(d[0]),
+        (2.0 * n[1].dot(d[0]) + n[0].dot(d[1])) / 3.0,
+        (n[2].dot(d[0]) + 2.0 * n[1].dot(d[1])) / 3.0,
+        n[2].dot(d[1]),
+    ];
+    let n_max = n.iter().map(|v| v.length()).fold(0.0, f64::max);
+    let d_max = d[0].length().max(d[1].length());
+    // Rounding of the products, far above f64's error, far below any tolerance used.
+    let bound = 3f64.sqrt() * delta * n_max + 1e-9 * n_max * d_max;
+    f.iter().all(|&x| x > bound) || f.iter().all(|&x| x < -bound)
 }
 
 /// Scratch memory of the continuous tests (reuse it: no allocation per test).
@@ -105,10 +112,20 @@ pub fn vertex_face_time(
     t_limit: f64,
     scratch: &mut CcdScratch,
 ) -> Option<f64> {
-    if !swept_boxes_overlap(std::slice::from_ref(p), tri, tol.distance) {
+    let window = overlap_window(
+        &MovingBox::around(std::slice::from_ref(p)),
+        &MovingBox::around(tri),
+        tol.distance,
+        (0.0, t_limit.min(1.0)),
+    )?;
+    let [a, b, c] = *tri;
+    let (w0, w1) = window;
+    let ends = |x: &Trajectory| [x.at(w0), x.at(w1)];
+    let (pa, pb, pc, pp) = (ends(&a), ends(&b), ends(&c), ends(p));
+    let minus = |x: [DVec3; 2], y: [DVec3; 2]| [x[0] - y[0], x[1] - y[1]];
+    if apart_from_plane(minus(pb, pa), minus(pc, pa), minus(pp, pa), tol.distance) {
         return None;
     }
-    let [a, b, c] = *tri;
     let problem = Problem {
         eval: |t: f64, u: f64, v: f64| {
             let at = a.at(t);
@@ -116,7 +133,7 @@ pub fn vertex_face_time(
         },
         simplex: true,
     };
-    earliest_root(&problem, &tol.solver(), t_limit, &mut scratch.stack)
+    earliest_root(&problem, &tol.solver(), window, t_limit, &mut scratch.stack)
 }
 
 /// The earliest time in `[0, t_limit)` at which edge `p` touches edge `q` (all moving linearly
@@ -128,10 +145,20 @@ pub fn edge_edge_time(
     t_limit: f64,
     scratch: &mut CcdScratch,
 ) -> Option<f64> {
-    if !swept_boxes_overlap(p, q, tol.distance) {
+    let window = overlap_window(
+        &MovingBox::around(p),
+        &MovingBox::around(q),
+        tol.distance,
+        (0.0, t_limit.min(1.0)),
+    )?;
+    let ([p0, p1], [q0, q1]) = (*p, *q);
+    let (w0, w1) = window;
+    let ends = |x: &Trajectory| [x.at(w0), x.at(w1)];
+    let minus = |x: [DVec3; 2], y: [DVec3; 2]| [x[0] - y[0], x[1] - y[1]];
+    let (a0, a1, b0, b1) = (ends(&p0), ends(&p1), ends(&q0), ends(&q1));
+    if apart_from_plane(minus(a1, a0), minus(b1, b0), minus(b0, a0), tol.distance) {
         return None;
     }
-    let ([p0, p1], [q0, q1]) = (*p, *q);
     let problem = Problem {
         eval: |t: f64, u: f64, v: f64| {
             let (pa, qa) = (p0.at(t), q0.at(t));
@@ -139,7 +166,7 @@ pub fn edge_edge_time(
         },
         simplex: false,
     };
-    earliest_root(&problem, &tol.solver(), t_limit, &mut scratch.stack)
+    earliest_root(&problem, &tol.solver(), window, t_limit, &mut scratch.stack)
 }
 
 #[cfg(test)]
@@ -189,6 +216,67 @@ mod tests {
         // Parallel, passing beside each other (1 apart in y): no contact.
         let q = [DVec3::new(-0.5, 1.0, 0.0), DVec3::new(2.0, 1.0, 0.0)].map(Trajectory::still);
         assert!(edge_edge_time(&p, &q, &tol, 1.0, &mut s).is_none());
+    }
+
+    #[test]
+    fn the_plane_filter_never_drops_features_that_come_close() {
+        use crate::geometry::{closest_point_on_triangle, closest_points_segment_segment};
+        // Random features moving through a small region: whenever the filter says "apart" over
+        // the step, the features are more than delta apart (max norm) at every sampled time.
+        let mut seed = 99u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        let delta = 0.05;
+        let (mut dropped, mut close) = (0, 0);
+        for _ in 0..4000 {
+            let mut path = || {
+                Trajectory::new(
+                    DVec3::new(next(), next(), next()),
+                    DVec3::new(next(), next(), next()),
+                )
+            };
+            let (p, tri) = (path(), [path(), path(), path()]);
+            let edges = ([path(), path()], [path(), path()]);
+            let at = |x: &Trajectory| [x.start, x.end];
+            let minus = |x: [DVec3; 2], y: [DVec3; 2]| [x[0] - y[0], x[1] - y[1]];
+            let vf_apart = apart_from_plane(
+                minus(at(&tri[1]), at(&tri[0])),
+                minus(at(&tri[2]), at(&tri[0])),
+                minus(at(&p), at(&tri[0])),
+                delta,
+            );
+            let (e, f) = edges;
+            let ee_apart = apart_from_plane(
+                minus(at(&e[1]), at(&e[0])),
+                minus(at(&f[1]), at(&f[0])),
+                minus(at(&f[0]), at(&e[0])),
+                delta,
+            );
+            for k in 0..=200 {
+                let t = k as f64 / 200.0;
+                let q = tri.map(|v| v.at(t));
+                let vf = (p.at(t) - closest_point_on_triangle(p.at(t), &q)).abs();
+                let c =
+                    closest_points_segment_segment(e[0].at(t), e[1].at(t), f[0].at(t), f[1].at(t));
+                let ee = (c.point_a - c.point_b).abs();
+                for (apart, gap) in [(vf_apart, vf), (ee_apart, ee)] {
+                    if gap.max_element() <= delta {
+                        close += 1;
+                        assert!(!apart, "dropped features {gap:?} apart at {t}");
+                    }
+                }
+            }
+            dropped += vf_apart as usize + ee_apart as usize;
+        }
+        // The filter does drop pairs, and pairs do come close: the test can fail both ways.
+        assert!(
+            dropped > 300 && close > 1000,
+            "{dropped} dropped, {close} close"
+        );
     }
 
     #[test]

@@ -1,12 +1,11 @@
 //! The continuous query between two meshes: the first time of impact over a step.
 use glam::{DVec3, Vec3};
 
-use super::primitive::{
-    CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,
-};
-use super::swept::{DeformingPiece, RigidPiece, SweptMesh, chord_deviation, mesh_radius};
+use super::descent::{DescentScratch, first_impact};
+use super::primitive::PrimitiveTolerances;
+use super::swept::{BoxFrame, DeformingPiece, RigidPiece, chord_deviation, mesh_radius};
 use crate::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, TrianglePair, intersects_with};
-use crate::geometry::{Pose, closest_points_segment_segment, closest_points_triangle_triangle};
+use crate::geometry::{Pose, closest_points_triangle_triangle};
 
 /// How a rigid mesh moves over the step: from `start` to `end`, its translation linearly and
 /// its rotation at a constant rate about one axis (spherical interpolation, the shorter way).
@@ -152,10 +151,9 @@ pub enum CcdError {
 /// Reusable scratch memory of the continuous queries.
 #[derive(Debug, Default, Clone)]
 pub struct CcdWorkspace {
-    stack: Vec<(u32, u32)>,
     exact: QueryWorkspace,
-    scratch: CcdScratch,
-    /// Triangle pairs tested by the last query.
+    descent: DescentScratch,
+    /// Triangle pairs tested by the last query (those whose boxes meet within the step).
     pub triangle_pairs: u64,
 }
 
@@ -214,6 +212,7 @@ pub fn time_of_impact(
         }
     }
     ws.triangle_pairs = 0;
+    ws.descent.triangle_pairs = 0;
     if let Some(hit) = overlap_at_start(a, &motion_a.start, b, &motion_b.start, ws) {
         return Ok(Some(hit));
     }
@@ -230,19 +229,8 @@ pub fn time_of_impact(
             .ceil()
             .min(options.max_pieces as f64) as u32
     };
-    // Pieces over which the meshes move about twice a leaf's size: each piece's swept boxes
-    // stay tight, and pieces are searched in time order, so the search ends at the first
-    // piece with a contact.
-    let travel = |mesh: &CollisionMesh, m: &RigidMotion| {
-        (m.end.translation - m.start.translation).length() as f64 + mesh_radius(mesh) * m.angle()
-    };
-    let leaf = leaf_size(a).min(leaf_size(b)).max(1e-30);
-    let by_travel = ((travel(a, motion_a) + travel(b, motion_b)) / (2.0 * leaf))
-        .ceil()
-        .min(options.max_pieces as f64) as u32;
     let pieces = pieces_for(a, motion_a)
         .max(pieces_for(b, motion_b))
-        .max(by_travel)
         .clamp(1, options.max_pieces.max(1));
     let stray = chord_deviation(mesh_radius(a), motion_a.angle() / pieces as f64)
         + chord_deviation(mesh_radius(b), motion_b.angle() / pieces as f64);
@@ -251,11 +239,32 @@ pub fn time_of_impact(
         time: (options.time_tolerance.max(0.0) as f64 * pieces as f64).min(1.0),
         ..Default::default()
     };
+    // The node boxes are taken in the frame of a mesh that does not turn: its own boxes are then
+    // the tree's, tight, and only the other mesh's are turned into it.
+    let turns = |m: &RigidMotion| m.start.rotation != m.end.rotation;
+    let owner = match (turns(motion_a), turns(motion_b)) {
+        (false, _) => Some(true),
+        (true, false) => Some(false),
+        (true, true) => None,
+    };
     for k in 0..pieces {
         let (s0, s1) = (k as f32 / pieces as f32, (k + 1) as f32 / pieces as f32);
-        let pa = RigidPiece::new(a, motion_a.at(s0), motion_a.at(s1));
-        let pb = RigidPiece::new(b, motion_b.at(s0), motion_b.at(s1));
-        if let Some(hit) = first_impact(&pa, &pb, &tol, ws) {
+        let (a0, a1, b0, b1) = (
+            motion_a.at(s0),
+            motion_a.at(s1),
+            motion_b.at(s0),
+            motion_b.at(s1),
+        );
+        let frame = match owner {
+            Some(true) => BoxFrame::Mesh(a0, a1),
+            Some(false) => BoxFrame::Mesh(b0, b1),
+            None => BoxFrame::World,
+        };
+        let pa = RigidPiece::new(a, a0, a1, frame, owner == Some(true));
+        let pb = RigidPiece::new(b, b0, b1, frame, owner == Some(false));
+        let hit = first_impact(&pa, &pb, &tol, frame.max_norm_growth(), &mut ws.descent);
+        ws.triangle_pairs = ws.descent.triangle_pairs;
+        if let Some(hit) = hit {
             return Ok(Some(TimeOfImpact {
                 time: ((k as f64 + hit.time as f64) / pieces as f64) as f32,
                 ..hit
@@ -263,14 +272,6 @@ pub fn time_of_impact(
         }
     }
     Ok(None)
-}
-
-/// A typical leaf box's size: the root box's diagonal over the square root of the number of
-/// leaves (leaves tile a surface).
-fn leaf_size(mesh: &CollisionMesh) -> f64 {
-    let leaves = mesh.bvh().nodes().len().div_ceil(2).max(1) as f64;
-    let root = mesh.bvh().root_aabb();
-    (root.max - root.min).as_dvec3().length() / leaves.sqrt()
 }
 
 /// The first time of impact of two deforming meshes whose vertices move linearly from their
@@ -298,6 +299,7 @@ pub fn deforming_time_of_impact(
         }
     }
     ws.triangle_pairs = 0;
+    ws.descent.triangle_pairs = 0;
     if let Some(hit) = overlap_at_start(a.0, &Pose::IDENTITY, b.0, &Pose::IDENTITY, ws) {
         return Ok(Some(hit));
     }
@@ -314,7 +316,9 @@ pub fn deforming_time_of_impact(
         start: b.0,
         end: b.1,
     };
-    Ok(first_impact(&pa, &pb, &tol, ws))
+    let hit = first_impact(&pa, &pb, &tol, 1.0, &mut ws.descent);
+    ws.triangle_pairs = ws.descent.triangle_pairs;
+    Ok(hit)
 }
 
 /// A contact at time 0 if the surfaces already cross at the start (feature pairs that cross
@@ -356,214 +360,4 @@ fn overlap_at_start(
         triangles: pair,
         features: ImpactFeatures::Overlapping,
     })
-}
-
-/// The earliest contact over one piece (time as a fraction of the piece).
-fn first_impact(
-    a: &impl SweptMesh,
-    b: &impl SweptMesh,
-    tol: &PrimitiveTolerances,
-    ws: &mut CcdWorkspace,
-) -> Option<TimeOfImpact> {
-    let margin = tol.distance as f32 * 1.01;
-    let mut best: Option<(f64, Candidate)> = None;
-    ws.stack.clear();
-    ws.stack.push((0, 0));
-    while let Some((i, j)) = ws.stack.pop() {
-        let (bi, bj) = (a.node_box(i as usize), b.node_box(j as usize));
-        if !bi.inflated(margin).intersects(&bj) {
-            continue;
-        }
-        let (ni, nj) = (&a.bvh().nodes()[i as usize], &b.bvh().nodes()[j as usize]);
-        match (ni.is_leaf(), nj.is_leaf()) {
-            (true, true) => {
-                for &ta in a.bvh().triangles_of(ni) {
-                    for &tb in b.bvh().triangles_of(nj) {
-                        ws.triangle_pairs += 1;
-                        let limit = best.as_ref().map_or(1.0 + 1e-12, |(t, _)| *t);
-                        if let Some(found) =
-                            triangle_pair(a, ta, b, tb, tol, limit, &mut ws.scratch)
-                            && best.as_ref().is_none_or(|(t, _)| found.0 < *t)
-                        {
-                            best = Some(found);
-                        }
-                    }
-                }
-            }
-            // Descend the larger box (or the only inner node).
-            (false, true) => push_children(&mut ws.stack, ni.left(), j, true),
-            (true, false) => push_children(&mut ws.stack, i, nj.left(), false),
-            (false, false) => {
-                if bi.surface_area() >= bj.surface_area() {
-                    push_children(&mut ws.stack, ni.left(), j, true);
-                } else {
-                    push_children(&mut ws.stack, i, nj.left(), false);
-                }
-            }
-        }
-    }
-    best.map(|(t, c)| c.impact(a, b, t))
-}
-
-fn push_children(stack: &mut Vec<(u32, u32)>, i: u32, j: u32, first: bool) {
-    if first {
-        stack.extend([(i, j), (i + 1, j)]);
-    } else {
-        stack.extend([(i, j), (i, j + 1)]);
-    }
-}
-
-/// Which features a root was found for (vertex indices of the meshes).
-#[derive(Debug, Clone, Copy)]
-enum Meeting {
-    VertexFace(u32),
-    FaceVertex(u32),
-    EdgeEdge([u32; 2], [u32; 2]),
-}
-
-impl Meeting {
-    fn features(self) -> ImpactFeatures {
-        match self {
-            Meeting::VertexFace(vertex) => ImpactFeatures::VertexFace { vertex },
-            Meeting::FaceVertex(vertex) => ImpactFeatures::FaceVertex { vertex },
-            Meeting::EdgeEdge(a, b) => ImpactFeatures::EdgeEdge { a, b },
-        }
-    }
-}
-
-/// The features found to meet first, before their contact is worked out.
-#[derive(Debug, Clone, Copy)]
-struct Candidate {
-    triangles: TrianglePair,
-    features: Meeting,
-}
-
-/// The earliest contact of triangle `ta` of `a` and `tb` of `b` before `limit`: the six
-/// vertex–face and nine edge–edge tests, each bounded by the earliest found so far.
-fn triangle_pair(
-    a: &impl SweptMesh,
-    ta: u32,
-    b: &impl SweptMesh,
-    tb: u32,
-    tol: &PrimitiveTolerances,
-    mut limit: f64,
-    scratch: &mut CcdScratch,
-) -> Option<(f64, Candidate)> {
-    let (fa, fb) = (a.triangles()[ta as usize], b.triangles()[tb as usize]);
-    let (va, vb) = (fa.map(|v| a.vertex(v)), fb.map(|v| b.vertex(v)));
-    let edge = |k: usize| [k, (k + 1) % 3];
-    let meetings = (0..3)
-        .flat_map(|k| [Meeting::VertexFace(k as u32), Meeting::FaceVertex(k as u32)])
-        .chain((0..9).map(|k| {
-            let (i, j) = (edge(k / 3), edge(k % 3));
-            Meeting::EdgeEdge(i.map(|x| x as u32), j.map(|x| x as u32))
-        }));
-    let mut best = None;
-    // Meetings are built with corner numbers (0..3) and reported with vertex indices.
-    for m in meetings {
-        let (t, features) = match m {
-            Meeting::VertexFace(k) => (
-                vertex_face_time(&va[k as usize], &vb, tol, limit, scratch),
-                Meeting::VertexFace(fa[k as usize]),
-            ),
-            Meeting::FaceVertex(k) => (
-                vertex_face_time(&vb[k as usize], &va, tol, limit, scratch),
-                Meeting::FaceVertex(fb[k as usize]),
-            ),
-            Meeting::EdgeEdge(i, j) => (
-                edge_edge_time(
-                    &i.map(|k| va[k as usize]),
-                    &j.map(|k| vb[k as usize]),
-                    tol,
-                    limit,
-                    scratch,
-                ),
-                Meeting::EdgeEdge(i.map(|k| fa[k as usize]), j.map(|k| fb[k as usize])),
-            ),
-        };
-        if let Some(t) = t {
-            // The solvers only return times before the limit.
-            limit = t;
-            let triangles = TrianglePair { a: ta, b: tb };
-            best = Some((
-                t,
-                Candidate {
-                    triangles,
-                    features,
-                },
-            ));
-        }
-    }
-    best
-}
-
-impl Candidate {
-    /// The contact point and normal at time `t` of the piece.
-    fn impact(&self, a: &impl SweptMesh, b: &impl SweptMesh, t: f64) -> TimeOfImpact {
-        let (point, normal) = match self.features {
-            Meeting::VertexFace(vertex) => {
-                let p = a.vertex(vertex);
-                let face = b.triangles()[self.triangles.b as usize].map(|v| b.vertex(v));
-                // The face's normal, towards the side the vertex comes from.
-                let n = face_normal_towards(&face, &p, t);
-                (p.at(t), n)
-            }
-            Meeting::FaceVertex(vertex) => {
-                let p = b.vertex(vertex);
-                let face = a.triangles()[self.triangles.a as usize].map(|v| a.vertex(v));
-                (p.at(t), -face_normal_towards(&face, &p, t))
-            }
-            Meeting::EdgeEdge(ea, eb) => {
-                let (pa, pb) = (ea.map(|v| a.vertex(v)), eb.map(|v| b.vertex(v)));
-                edge_contact(&pa, &pb, t)
-            }
-        };
-        TimeOfImpact {
-            time: t as f32,
-            point: point.as_vec3(),
-            normal: normal.as_vec3().normalize_or(Vec3::X),
-            triangles: self.triangles,
-            features: self.features.features(),
-        }
-    }
-}
-
-/// The unit normal of `face` at time `t`, oriented towards the side `p` comes from (where `p`
-/// was at the start, or against `p`'s motion relative to the face when it starts on it).
-fn face_normal_towards(face: &[Trajectory; 3], p: &Trajectory, t: f64) -> DVec3 {
-    let [x, y, z] = face.map(|v| v.at(t));
-    let n = (y - x).cross(z - x).normalize_or_zero();
-    let side = n.dot(p.start - face[0].start);
-    let relative_motion = (p.end - p.start) - (face[0].end - face[0].start);
-    let toward = if side.abs() > 1e-12 {
-        side
-    } else {
-        -n.dot(relative_motion)
-    };
-    if toward < 0.0 { -n } else { n }
-}
-
-/// The contact point (midway between the edges' closest points) and the normal (from `q`
-/// towards `p`) of two edges at time `t`.
-fn edge_contact(p: &[Trajectory; 2], q: &[Trajectory; 2], t: f64) -> (DVec3, DVec3) {
-    let now = closest_points_segment_segment(p[0].at(t), p[1].at(t), q[0].at(t), q[1].at(t));
-    let before = closest_points_segment_segment(p[0].start, p[1].start, q[0].start, q[1].start);
-    let n = (p[1].at(t) - p[0].at(t))
-        .cross(q[1].at(t) - q[0].at(t))
-        .normalize_or_zero();
-    let apart = before.point_a - before.point_b;
-    let relative_motion = (p[0].end - p[0].start) - (q[0].end - q[0].start);
-    let n = if n == DVec3::ZERO {
-        // Parallel edges: the direction between them, or against their motion.
-        if apart.length_squared() > 1e-24 {
-            apart.normalize()
-        } else {
-            -relative_motion.normalize_or(DVec3::X)
-        }
-    } else if n.dot(apart) < 0.0 || (n.dot(apart) == 0.0 && n.dot(relative_motion) > 0.0) {
-        -n
-    } else {
-        n
-    };
-    (0.5 * (now.point_a + now.point_b), n)
 }

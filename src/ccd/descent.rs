@@ -1,0 +1,417 @@
+//! The search for the earliest contact over one piece of the step: both trees descended
+//! together, node pairs taken in the order of the earliest time their moving boxes can meet,
+//! so that the search stops as soon as no pair left can meet before the earliest contact found.
+use std::cmp::Ordering;
+use std::collections::BinaryHeap;
+
+use glam::{DVec3, Vec3};
+
+use super::primitive::{
+    CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,
+};
+use super::query::{ImpactFeatures, TimeOfImpact};
+use super::swept::SweptMesh;
+use super::window::{MovingBox, overlap_window};
+use crate::bvh::TrianglePair;
+use crate::geometry::closest_points_segment_segment;
+
+/// Scratch memory of the search (reused between queries).
+#[derive(Debug, Default, Clone)]
+pub(crate) struct DescentScratch {
+    queue: BinaryHeap<NodePair>,
+    /// The moving boxes of the nodes in the queue (each worked out once per node pair queued).
+    boxes: Vec<MovingBox>,
+    leaf_a: Vec<LeafTriangle>,
+    leaf_b: Vec<LeafTriangle>,
+    features: CcdScratch,
+    /// Triangle pairs whose leaves' windows met (counted for the workspace's statistics).
+    pub triangle_pairs: u64,
+}
+
+/// A pair of nodes and the time window in which their moving boxes meet; ordered so that the
+/// queue pops the earliest window first.
+#[derive(Debug, Clone, Copy)]
+struct NodePair {
+    from: f64,
+    to: f64,
+    a: u32,
+    b: u32,
+    /// Where the nodes' boxes are in [`DescentScratch::boxes`].
+    box_a: u32,
+    box_b: u32,
+}
+
+impl PartialEq for NodePair {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for NodePair {}
+
+impl PartialOrd for NodePair {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for NodePair {
+    fn cmp(&self, other: &Self) -> Ordering {
+        // Reversed: the max-heap pops the earliest.
+        other
+            .from
+            .total_cmp(&self.from)
+            .then_with(|| (other.a, other.b).cmp(&(self.a, self.b)))
+    }
+}
+
+/// The earliest contact over one piece (time as a fraction of the piece), or `None`. The node
+/// boxes' frame may turn world distances by `growth` in the max norm (see
+/// [`BoxFrame::max_norm_growth`](super::swept::BoxFrame::max_norm_growth)); triangles and
+/// features are tested in world coordinates.
+pub(crate) fn first_impact(
+    a: &impl SweptMesh,
+    b: &impl SweptMesh,
+    tol: &PrimitiveTolerances,
+    growth: f64,
+    ws: &mut DescentScratch,
+) -> Option<TimeOfImpact> {
+    let margin = tol.distance * 1.01;
+    let node_margin = margin * growth;
+    let mut best: Option<Found> = None;
+    let limit = |best: &Option<Found>| Found::limit(best, tol);
+    ws.queue.clear();
+    ws.boxes.clear();
+    ws.boxes.extend([a.node_box(0), b.node_box(0)]);
+    push(
+        &mut ws.queue,
+        &ws.boxes,
+        node_margin,
+        (0, 0),
+        (0, 1),
+        (0.0, 1.0),
+    );
+    while let Some(pair) = ws.queue.pop() {
+        let until = limit(&best);
+        if pair.from >= until {
+            // Every pair left starts later: nothing can come before the answer.
+            break;
+        }
+        let (ni, nj) = (
+            &a.bvh().nodes()[pair.a as usize],
+            &b.bvh().nodes()[pair.b as usize],
+        );
+        match (ni.is_leaf(), nj.is_leaf()) {
+            (true, true) => {
+                ws.leaf_a.clear();
+                let leaf_a = a.bvh().triangles_of(ni).iter();
+                ws.leaf_a.extend(leaf_a.map(|&t| LeafTriangle::new(a, t)));
+                ws.leaf_b.clear();
+                let leaf_b = b.bvh().triangles_of(nj).iter();
+                ws.leaf_b.extend(leaf_b.map(|&t| LeafTriangle::new(b, t)));
+                for ta in &ws.leaf_a {
+                    for tb in &ws.leaf_b {
+                        let until = limit(&best);
+                        let window = (pair.from, pair.to.min(until));
+                        if overlap_window(&ta.bounds, &tb.bounds, margin, window).is_none() {
+                            continue;
+                        }
+                        ws.triangle_pairs += 1;
+                        triangle_pair(ta, tb, tol, &mut best, &mut ws.features);
+                    }
+                }
+            }
+            (leaf_a, leaf_b) => {
+                // Split the inner node, or the larger of two; the children's boxes lie in
+                // their parent's, so their windows lie in the parent's.
+                let (box_a, box_b) = (ws.boxes[pair.box_a as usize], ws.boxes[pair.box_b as usize]);
+                let split_a = !leaf_a && (leaf_b || box_a.size() >= box_b.size());
+                let within = (pair.from, pair.to.min(until));
+                for child in 0..2 {
+                    let (nodes, boxes) = if split_a {
+                        let i = ni.left() + child;
+                        ws.boxes.push(a.node_box(i as usize));
+                        ((i, pair.b), (ws.boxes.len() as u32 - 1, pair.box_b))
+                    } else {
+                        let j = nj.left() + child;
+                        ws.boxes.push(b.node_box(j as usize));
+                        ((pair.a, j), (pair.box_a, ws.boxes.len() as u32 - 1))
+                    };
+                    push(&mut ws.queue, &ws.boxes, node_margin, nodes, boxes, within);
+                }
+            }
+        }
+    }
+    best.map(|f| TimeOfImpact {
+        time: f.earliest as f32,
+        ..f.candidate.impact(a, b, f.time)
+    })
+}
+
+/// The contact kept so far. Where several features meet at once (faces meeting flat, a vertex
+/// arriving on an edge shared by two faces), the one whose normal lies most along the relative
+/// motion is kept among the roots within `time_tolerance` of the earliest (its normal is the
+/// one a response should push along), while the time reported is the earliest root found, so
+/// the answer is never late.
+#[derive(Debug, Clone, Copy)]
+struct Found {
+    time: f64,
+    earliest: f64,
+    /// `|n · v| / |v|` for the contact normal `n` and the features' relative motion `v`.
+    alignment: f64,
+    candidate: Candidate,
+}
+
+impl Found {
+    /// Times at or after this cannot change the answer.
+    fn limit(best: &Option<Found>, tol: &PrimitiveTolerances) -> f64 {
+        best.as_ref().map_or(1.0 + 1e-12, |f| f.earliest + tol.time)
+    }
+
+    /// Keeps the root at `time` of `candidate` if it comes first, or at the same time with a
+    /// normal more along the motion.
+    fn offer(best: &mut Option<Found>, new: Found, tol: &PrimitiveTolerances) {
+        let Some(f) = best else {
+            *best = Some(new);
+            return;
+        };
+        let earliest = f.earliest.min(new.time);
+        let first = new.time < f.earliest - tol.time;
+        let better = new.time <= f.earliest + tol.time && new.alignment > f.alignment;
+        if first || better {
+            *f = new;
+        }
+        f.earliest = earliest;
+    }
+}
+
+/// Queues the node pair `nodes` (their boxes at `boxes` in `arena`) if their boxes meet within
+/// `within`.
+fn push(
+    queue: &mut BinaryHeap<NodePair>,
+    arena: &[MovingBox],
+    margin: f64,
+    nodes: (u32, u32),
+    boxes: (u32, u32),
+    within: (f64, f64),
+) {
+    let (box_a, box_b) = (&arena[boxes.0 as usize], &arena[boxes.1 as usize]);
+    if let Some((from, to)) = overlap_window(box_a, box_b, margin, within)
+        && from < within.1
+    {
+        queue.push(NodePair {
+            from,
+            to,
+            a: nodes.0,
+            b: nodes.1,
+            box_a: boxes.0,
+            box_b: boxes.1,
+        });
+    }
+}
+
+/// Which features a root was found for (vertex indices of the meshes).
+#[derive(Debug, Clone, Copy)]
+enum Meeting {
+    VertexFace(u32),
+    FaceVertex(u32),
+    EdgeEdge([u32; 2], [u32; 2]),
+}
+
+impl Meeting {
+    fn features(self) -> ImpactFeatures {
+        match self {
+            Meeting::VertexFace(vertex) => ImpactFeatures::VertexFace { vertex },
+            Meeting::FaceVertex(vertex) => ImpactFeatures::FaceVertex { vertex },
+            Meeting::EdgeEdge(a, b) => ImpactFeatures::EdgeEdge { a, b },
+        }
+    }
+}
+
+/// The features found to meet first, before their contact is worked out.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    triangles: TrianglePair,
+    features: Meeting,
+}
+
+/// One triangle of a leaf as the tests read it: its index, its vertices and their paths over
+/// the piece, and the box around them.
+#[derive(Debug, Clone, Copy)]
+struct LeafTriangle {
+    index: u32,
+    corners: [u32; 3],
+    paths: [Trajectory; 3],
+    bounds: MovingBox,
+}
+
+impl LeafTriangle {
+    fn new(mesh: &impl SweptMesh, index: u32) -> Self {
+        let corners = mesh.triangles()[index as usize];
+        let paths = corners.map(|v| mesh.vertex(v));
+        Self {
+            index,
+            corners,
+            paths,
+            bounds: MovingBox::around(&paths),
+        }
+    }
+}
+
+/// The contacts of triangles `ta` and `tb` that come before `best`'s: the six vertex–face and
+/// nine edge–edge tests, each bounded by the earliest found so far.
+fn triangle_pair(
+    ta: &LeafTriangle,
+    tb: &LeafTriangle,
+    tol: &PrimitiveTolerances,
+    best: &mut Option<Found>,
+    scratch: &mut CcdScratch,
+) {
+    let (fa, fb) = (ta.corners, tb.corners);
+    let (va, vb) = (&ta.paths, &tb.paths);
+    let edge = |k: usize| [k, (k + 1) % 3];
+    let meetings = (0..3)
+        .flat_map(|k| [Meeting::VertexFace(k as u32), Meeting::FaceVertex(k as u32)])
+        .chain((0..9).map(|k| {
+            let (i, j) = (edge(k / 3), edge(k % 3));
+            Meeting::EdgeEdge(i.map(|x| x as u32), j.map(|x| x as u32))
+        }));
+    // Meetings are built with corner numbers (0..3) and reported with vertex indices.
+    for m in meetings {
+        let limit = Found::limit(best, tol);
+        // The root, the features, the contact normal at a time and the relative motion.
+        let found = match m {
+            Meeting::VertexFace(k) => {
+                let p = &va[k as usize];
+                vertex_face_time(p, vb, tol, limit, scratch).map(|t| {
+                    let n = face_normal_towards(vb, p, t);
+                    (
+                        t,
+                        Meeting::VertexFace(fa[k as usize]),
+                        n,
+                        motion(&[*p]) - motion(vb),
+                    )
+                })
+            }
+            Meeting::FaceVertex(k) => {
+                let p = &vb[k as usize];
+                vertex_face_time(p, va, tol, limit, scratch).map(|t| {
+                    let n = face_normal_towards(va, p, t);
+                    (
+                        t,
+                        Meeting::FaceVertex(fb[k as usize]),
+                        n,
+                        motion(&[*p]) - motion(va),
+                    )
+                })
+            }
+            Meeting::EdgeEdge(i, j) => {
+                let (ea, eb) = (i.map(|k| va[k as usize]), j.map(|k| vb[k as usize]));
+                edge_edge_time(&ea, &eb, tol, limit, scratch).map(|t| {
+                    let features =
+                        Meeting::EdgeEdge(i.map(|k| fa[k as usize]), j.map(|k| fb[k as usize]));
+                    (
+                        t,
+                        features,
+                        edge_contact(&ea, &eb, t).1,
+                        motion(&ea) - motion(&eb),
+                    )
+                })
+            }
+        };
+        if let Some((time, features, normal, relative)) = found {
+            let candidate = Candidate {
+                triangles: TrianglePair {
+                    a: ta.index,
+                    b: tb.index,
+                },
+                features,
+            };
+            let alignment = normal.dot(relative.normalize_or_zero()).abs();
+            let new = Found {
+                time,
+                earliest: time,
+                alignment,
+                candidate,
+            };
+            Found::offer(best, new, tol);
+        }
+    }
+}
+
+/// The mean motion of some points over the piece.
+fn motion(points: &[Trajectory]) -> DVec3 {
+    let sum: DVec3 = points.iter().map(|p| p.end - p.start).sum();
+    sum / points.len() as f64
+}
+
+impl Candidate {
+    /// The contact point and normal at time `t` of the piece.
+    fn impact(&self, a: &impl SweptMesh, b: &impl SweptMesh, t: f64) -> TimeOfImpact {
+        let (point, normal) = match self.features {
+            Meeting::VertexFace(vertex) => {
+                let p = a.vertex(vertex);
+                let face = b.triangles()[self.triangles.b as usize].map(|v| b.vertex(v));
+                // The face's normal, towards the side the vertex comes from.
+                let n = face_normal_towards(&face, &p, t);
+                (p.at(t), n)
+            }
+            Meeting::FaceVertex(vertex) => {
+                let p = b.vertex(vertex);
+                let face = a.triangles()[self.triangles.a as usize].map(|v| a.vertex(v));
+                (p.at(t), -face_normal_towards(&face, &p, t))
+            }
+            Meeting::EdgeEdge(ea, eb) => {
+                let (pa, pb) = (ea.map(|v| a.vertex(v)), eb.map(|v| b.vertex(v)));
+                edge_contact(&pa, &pb, t)
+            }
+        };
+        TimeOfImpact {
+            time: t as f32,
+            point: point.as_vec3(),
+            normal: normal.as_vec3().normalize_or(Vec3::X),
+            triangles: self.triangles,
+            features: self.features.features(),
+        }
+    }
+}
+
+/// The unit normal of `face` at time `t`, oriented towards the side `p` comes from (where `p`
+/// was at the start, or against `p`'s motion relative to the face when it starts on it).
+fn face_normal_towards(face: &[Trajectory; 3], p: &Trajectory, t: f64) -> DVec3 {
+    let [x, y, z] = face.map(|v| v.at(t));
+    let n = (y - x).cross(z - x).normalize_or_zero();
+    let side = n.dot(p.start - face[0].start);
+    let relative_motion = (p.end - p.start) - (face[0].end - face[0].start);
+    let toward = if side.abs() > 1e-12 {
+        side
+    } else {
+        -n.dot(relative_motion)
+    };
+    if toward < 0.0 { -n } else { n }
+}
+
+/// The contact point (midway between the edges' closest points) and the normal (from `q`
+/// towards `p`) of two edges at time `t`.
+fn edge_contact(p: &[Trajectory; 2], q: &[Trajectory; 2], t: f64) -> (DVec3, DVec3) {
+    let now = closest_points_segment_segment(p[0].at(t), p[1].at(t), q[0].at(t), q[1].at(t));
+    let before = closest_points_segment_segment(p[0].start, p[1].start, q[0].start, q[1].start);
+    let n = (p[1].at(t) - p[0].at(t))
+        .cross(q[1].at(t) - q[0].at(t))
+        .normalize_or_zero();
+    let apart = before.point_a - before.point_b;
+    let relative_motion = (p[0].end - p[0].start) - (q[0].end - q[0].start);
+    let n = if n == DVec3::ZERO {
+        // Parallel edges: the direction between them, or against their motion.
+        if apart.length_squared() > 1e-24 {
+            apart.normalize()
+        } else {
+            -relative_motion.normalize_or(DVec3::X)
+        }
+    } else if n.dot(apart) < 0.0 || (n.dot(apart) == 0.0 && n.dot(relative_motion) > 0.0) {
+        -n
+    } else {
+        n
+    };
+    (0.5 * (now.point_a + now.point_b), n)
+}
