@@ -10,7 +10,7 @@ use super::primitive::{
     CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,
 };
 use super::query::{ImpactFeatures, TimeOfImpact};
-use super::swept::SweptMesh;
+use super::swept::{Span, SweptMesh};
 use super::window::{MovingBox, overlap_window};
 use crate::bvh::TrianglePair;
 use crate::geometry::closest_points_segment_segment;
@@ -39,6 +39,8 @@ struct NodePair {
     /// Where the nodes' boxes are in [`DescentScratch::boxes`].
     box_a: u32,
     box_b: u32,
+    /// The pieces of the step the boxes cover.
+    span: Span,
 }
 
 impl PartialEq for NodePair {
@@ -65,10 +67,15 @@ impl Ord for NodePair {
     }
 }
 
-/// The earliest contact over one piece (time as a fraction of the piece), or `None`. The node
-/// boxes' frame may turn world distances by `growth` in the max norm (see
+/// The earliest contact over the step, or `None`. The node boxes' frame may turn world
+/// distances by `growth` in the max norm (see
 /// [`BoxFrame::max_norm_growth`](super::swept::BoxFrame::max_norm_growth)); triangles and
-/// features are tested in world coordinates.
+/// features are tested in world coordinates, piece by piece.
+///
+/// Queue entries are node pairs over a run of pieces (at first both roots over the whole
+/// step). An entry is split in time (its run halved) while its boxes are loose from the meshes'
+/// turning or once both nodes are leaves, and otherwise split in space (the larger node's
+/// children); leaf pairs over one piece have their triangle pairs tested.
 pub(crate) fn first_impact(
     a: &impl SweptMesh,
     b: &impl SweptMesh,
@@ -76,19 +83,33 @@ pub(crate) fn first_impact(
     growth: f64,
     ws: &mut DescentScratch,
 ) -> Option<TimeOfImpact> {
+    let pieces = a.pieces().max(b.pieces()).max(1);
+    debug_assert!(a.pieces() == b.pieces() || a.pieces().min(b.pieces()) == 1);
     let margin = tol.distance * 1.01;
     let node_margin = margin * growth;
+    // The search runs in step time; a piece's tests in piece time.
+    let step_tol = PrimitiveTolerances {
+        time: tol.time / pieces as f64,
+        ..*tol
+    };
     let mut best: Option<Found> = None;
-    let limit = |best: &Option<Found>| Found::limit(best, tol);
+    let limit = |best: &Option<Found>| Found::limit(best, &step_tol);
     ws.queue.clear();
     ws.boxes.clear();
-    ws.boxes.extend([a.node_box(0), b.node_box(0)]);
+    let whole = (0, pieces);
+    ws.boxes
+        .extend([a.node_box(0, whole), b.node_box(0, whole)]);
+    let root = Entry {
+        nodes: (0, 0),
+        boxes: (0, 1),
+        span: whole,
+    };
     push(
         &mut ws.queue,
         &ws.boxes,
         node_margin,
-        (0, 0),
-        (0, 1),
+        pieces,
+        root,
         (0.0, 1.0),
     );
     while let Some(pair) = ws.queue.pop() {
@@ -101,51 +122,110 @@ pub(crate) fn first_impact(
             &a.bvh().nodes()[pair.a as usize],
             &b.bvh().nodes()[pair.b as usize],
         );
-        match (ni.is_leaf(), nj.is_leaf()) {
-            (true, true) => {
-                ws.leaf_a.clear();
-                let leaf_a = a.bvh().triangles_of(ni).iter();
-                ws.leaf_a.extend(leaf_a.map(|&t| LeafTriangle::new(a, t)));
-                ws.leaf_b.clear();
-                let leaf_b = b.bvh().triangles_of(nj).iter();
-                ws.leaf_b.extend(leaf_b.map(|&t| LeafTriangle::new(b, t)));
-                for ta in &ws.leaf_a {
-                    for tb in &ws.leaf_b {
-                        let until = limit(&best);
-                        let window = (pair.from, pair.to.min(until));
-                        if overlap_window(&ta.bounds, &tb.bounds, margin, window).is_none() {
-                            continue;
-                        }
-                        ws.triangle_pairs += 1;
-                        triangle_pair(ta, tb, tol, &mut best, &mut ws.features);
-                    }
-                }
-            }
-            (leaf_a, leaf_b) => {
-                // Split the inner node, or the larger of two; the children's boxes lie in
-                // their parent's, so their windows lie in the parent's.
-                let (box_a, box_b) = (ws.boxes[pair.box_a as usize], ws.boxes[pair.box_b as usize]);
-                let split_a = !leaf_a && (leaf_b || box_a.size() >= box_b.size());
-                let within = (pair.from, pair.to.min(until));
-                for child in 0..2 {
-                    let (nodes, boxes) = if split_a {
-                        let i = ni.left() + child;
-                        ws.boxes.push(a.node_box(i as usize));
-                        ((i, pair.b), (ws.boxes.len() as u32 - 1, pair.box_b))
-                    } else {
-                        let j = nj.left() + child;
-                        ws.boxes.push(b.node_box(j as usize));
-                        ((pair.a, j), (pair.box_a, ws.boxes.len() as u32 - 1))
+        let (box_a, box_b) = (ws.boxes[pair.box_a as usize], ws.boxes[pair.box_b as usize]);
+        let within = (pair.from, pair.to.min(until));
+        let (leaf_a, leaf_b) = (ni.is_leaf(), nj.is_leaf());
+        let span = pair.span;
+        if span.1 - span.0 > 1 {
+            let slack = a.turn_slack(span).max(b.turn_slack(span));
+            let loose = slack > 0.25 * box_a.largest_side().min(box_b.largest_side());
+            if (leaf_a && leaf_b) || loose {
+                let mid = span.0 + (span.1 - span.0) / 2;
+                for half in [(span.0, mid), (mid, span.1)] {
+                    ws.boxes.push(a.node_box(pair.a as usize, half));
+                    ws.boxes.push(b.node_box(pair.b as usize, half));
+                    let n = ws.boxes.len() as u32;
+                    let entry = Entry {
+                        nodes: (pair.a, pair.b),
+                        boxes: (n - 2, n - 1),
+                        span: half,
                     };
-                    push(&mut ws.queue, &ws.boxes, node_margin, nodes, boxes, within);
+                    push(&mut ws.queue, &ws.boxes, node_margin, pieces, entry, within);
+                }
+                continue;
+            }
+        }
+        if leaf_a && leaf_b {
+            let piece = span.0;
+            ws.leaf_a.clear();
+            let tris_a = a.bvh().triangles_of(ni).iter();
+            ws.leaf_a
+                .extend(tris_a.map(|&t| LeafTriangle::new(a, t, piece)));
+            ws.leaf_b.clear();
+            let tris_b = b.bvh().triangles_of(nj).iter();
+            ws.leaf_b
+                .extend(tris_b.map(|&t| LeafTriangle::new(b, t, piece)));
+            let at = PieceTime { piece, pieces };
+            let to_piece = |t: f64| at.to_piece(t).clamp(0.0, 1.0);
+            for ta in &ws.leaf_a {
+                for tb in &ws.leaf_b {
+                    let until = limit(&best);
+                    let window = (to_piece(pair.from), to_piece(pair.to.min(until)));
+                    if overlap_window(&ta.bounds, &tb.bounds, margin, window).is_none() {
+                        continue;
+                    }
+                    ws.triangle_pairs += 1;
+                    let tols = (tol, &step_tol);
+                    triangle_pair(ta, tb, tols, at, &mut best, &mut ws.features);
                 }
             }
+            continue;
+        }
+        // Split the inner node, or the larger of two; the children's boxes lie in their
+        // parent's, so their windows lie in the parent's.
+        let split_a = !leaf_a && (leaf_b || box_a.size() >= box_b.size());
+        for child in 0..2 {
+            let entry = if split_a {
+                let i = ni.left() + child;
+                ws.boxes.push(a.node_box(i as usize, span));
+                Entry {
+                    nodes: (i, pair.b),
+                    boxes: (ws.boxes.len() as u32 - 1, pair.box_b),
+                    span,
+                }
+            } else {
+                let j = nj.left() + child;
+                ws.boxes.push(b.node_box(j as usize, span));
+                Entry {
+                    nodes: (pair.a, j),
+                    boxes: (pair.box_a, ws.boxes.len() as u32 - 1),
+                    span,
+                }
+            };
+            push(&mut ws.queue, &ws.boxes, node_margin, pieces, entry, within);
         }
     }
     best.map(|f| TimeOfImpact {
         time: f.earliest as f32,
-        ..f.candidate.impact(a, b, f.time)
+        ..f.candidate.impact(a, b, f.piece, f.piece_time)
     })
+}
+
+/// Where a piece lies in the step.
+#[derive(Debug, Clone, Copy)]
+struct PieceTime {
+    piece: u32,
+    pieces: u32,
+}
+
+impl PieceTime {
+    /// Step time of piece time `t`.
+    fn to_step(self, t: f64) -> f64 {
+        (self.piece as f64 + t) / self.pieces as f64
+    }
+
+    /// Piece time of step time `t` (may lie outside `[0, 1]`).
+    fn to_piece(self, t: f64) -> f64 {
+        t * self.pieces as f64 - self.piece as f64
+    }
+}
+
+/// A node pair to queue, before its window is known.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    nodes: (u32, u32),
+    boxes: (u32, u32),
+    span: Span,
 }
 
 /// The contact kept so far. Where several features meet at once (faces meeting flat, a vertex
@@ -155,7 +235,11 @@ pub(crate) fn first_impact(
 /// the answer is never late.
 #[derive(Debug, Clone, Copy)]
 struct Found {
+    /// Step time of this root.
     time: f64,
+    /// Its piece and the time within it.
+    piece: u32,
+    piece_time: f64,
     earliest: f64,
     /// `|n · v| / |v|` for the contact normal `n` and the features' relative motion `v`.
     alignment: f64,
@@ -185,28 +269,38 @@ impl Found {
     }
 }
 
-/// Queues the node pair `nodes` (their boxes at `boxes` in `arena`) if their boxes meet within
-/// `within`.
+/// Queues `entry` if its boxes meet within `within` (step time).
 fn push(
     queue: &mut BinaryHeap<NodePair>,
     arena: &[MovingBox],
     margin: f64,
-    nodes: (u32, u32),
-    boxes: (u32, u32),
+    pieces: u32,
+    entry: Entry,
     within: (f64, f64),
 ) {
-    let (box_a, box_b) = (&arena[boxes.0 as usize], &arena[boxes.1 as usize]);
-    if let Some((from, to)) = overlap_window(box_a, box_b, margin, within)
-        && from < within.1
-    {
-        queue.push(NodePair {
-            from,
-            to,
-            a: nodes.0,
-            b: nodes.1,
-            box_a: boxes.0,
-            box_b: boxes.1,
-        });
+    let (box_a, box_b) = (
+        &arena[entry.boxes.0 as usize],
+        &arena[entry.boxes.1 as usize],
+    );
+    // The boxes move over the span's own time.
+    let (k0, k1) = (entry.span.0 as f64, entry.span.1 as f64);
+    let n = pieces as f64;
+    let to_span = |t: f64| ((t * n - k0) / (k1 - k0)).clamp(0.0, 1.0);
+    let to_step = |u: f64| (k0 + u * (k1 - k0)) / n;
+    let local = (to_span(within.0), to_span(within.1));
+    if let Some((from, to)) = overlap_window(box_a, box_b, margin, local) {
+        let (from, to) = (to_step(from), to_step(to));
+        if from < within.1 {
+            queue.push(NodePair {
+                from,
+                to,
+                a: entry.nodes.0,
+                b: entry.nodes.1,
+                box_a: entry.boxes.0,
+                box_b: entry.boxes.1,
+                span: entry.span,
+            });
+        }
     }
 }
 
@@ -246,9 +340,9 @@ struct LeafTriangle {
 }
 
 impl LeafTriangle {
-    fn new(mesh: &impl SweptMesh, index: u32) -> Self {
+    fn new(mesh: &impl SweptMesh, index: u32, piece: u32) -> Self {
         let corners = mesh.triangles()[index as usize];
-        let paths = corners.map(|v| mesh.vertex(v));
+        let paths = corners.map(|v| mesh.vertex(v, piece));
         Self {
             index,
             corners,
@@ -263,7 +357,8 @@ impl LeafTriangle {
 fn triangle_pair(
     ta: &LeafTriangle,
     tb: &LeafTriangle,
-    tol: &PrimitiveTolerances,
+    (tol, step_tol): (&PrimitiveTolerances, &PrimitiveTolerances),
+    at: PieceTime,
     best: &mut Option<Found>,
     scratch: &mut CcdScratch,
 ) {
@@ -278,7 +373,7 @@ fn triangle_pair(
         }));
     // Meetings are built with corner numbers (0..3) and reported with vertex indices.
     for m in meetings {
-        let limit = Found::limit(best, tol);
+        let limit = at.to_piece(Found::limit(best, step_tol)).min(1.0 + 1e-12);
         // The root, the features, the contact normal at a time and the relative motion.
         let found = match m {
             Meeting::VertexFace(k) => {
@@ -329,12 +424,14 @@ fn triangle_pair(
             };
             let alignment = normal.dot(relative.normalize_or_zero()).abs();
             let new = Found {
-                time,
-                earliest: time,
+                time: at.to_step(time),
+                piece: at.piece,
+                piece_time: time,
+                earliest: at.to_step(time),
                 alignment,
                 candidate,
             };
-            Found::offer(best, new, tol);
+            Found::offer(best, new, step_tol);
         }
     }
 }
@@ -346,23 +443,26 @@ fn motion(points: &[Trajectory]) -> DVec3 {
 }
 
 impl Candidate {
-    /// The contact point and normal at time `t` of the piece.
-    fn impact(&self, a: &impl SweptMesh, b: &impl SweptMesh, t: f64) -> TimeOfImpact {
+    /// The contact point and normal at time `t` of piece `piece`.
+    fn impact(&self, a: &impl SweptMesh, b: &impl SweptMesh, piece: u32, t: f64) -> TimeOfImpact {
         let (point, normal) = match self.features {
             Meeting::VertexFace(vertex) => {
-                let p = a.vertex(vertex);
-                let face = b.triangles()[self.triangles.b as usize].map(|v| b.vertex(v));
+                let p = a.vertex(vertex, piece);
+                let face = b.triangles()[self.triangles.b as usize].map(|v| b.vertex(v, piece));
                 // The face's normal, towards the side the vertex comes from.
                 let n = face_normal_towards(&face, &p, t);
                 (p.at(t), n)
             }
             Meeting::FaceVertex(vertex) => {
-                let p = b.vertex(vertex);
-                let face = a.triangles()[self.triangles.a as usize].map(|v| a.vertex(v));
+                let p = b.vertex(vertex, piece);
+                let face = a.triangles()[self.triangles.a as usize].map(|v| a.vertex(v, piece));
                 (p.at(t), -face_normal_towards(&face, &p, t))
             }
             Meeting::EdgeEdge(ea, eb) => {
-                let (pa, pb) = (ea.map(|v| a.vertex(v)), eb.map(|v| b.vertex(v)));
+                let (pa, pb) = (
+                    ea.map(|v| a.vertex(v, piece)),
+                    eb.map(|v| b.vertex(v, piece)),
+                );
                 edge_contact(&pa, &pb, t)
             }
         };

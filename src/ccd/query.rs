@@ -3,7 +3,7 @@ use glam::{DVec3, Vec3};
 
 use super::descent::{DescentScratch, first_impact};
 use super::primitive::PrimitiveTolerances;
-use super::swept::{BoxFrame, DeformingPiece, RigidPiece, chord_deviation, mesh_radius};
+use super::swept::{BoxFrame, DeformingStep, RigidStep, chord_deviation, mesh_radius};
 use crate::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, TrianglePair, intersects_with};
 use crate::geometry::{Pose, closest_points_triangle_triangle};
 
@@ -242,36 +242,16 @@ pub fn time_of_impact(
     // The node boxes are taken in the frame of a mesh that does not turn: its own boxes are then
     // the tree's, tight, and only the other mesh's are turned into it.
     let turns = |m: &RigidMotion| m.start.rotation != m.end.rotation;
-    let owner = match (turns(motion_a), turns(motion_b)) {
-        (false, _) => Some(true),
-        (true, false) => Some(false),
-        (true, true) => None,
+    let (frame, owner) = match (turns(motion_a), turns(motion_b)) {
+        (false, _) => (BoxFrame::Mesh(*motion_a), Some(true)),
+        (true, false) => (BoxFrame::Mesh(*motion_b), Some(false)),
+        (true, true) => (BoxFrame::World, None),
     };
-    for k in 0..pieces {
-        let (s0, s1) = (k as f32 / pieces as f32, (k + 1) as f32 / pieces as f32);
-        let (a0, a1, b0, b1) = (
-            motion_a.at(s0),
-            motion_a.at(s1),
-            motion_b.at(s0),
-            motion_b.at(s1),
-        );
-        let frame = match owner {
-            Some(true) => BoxFrame::Mesh(a0, a1),
-            Some(false) => BoxFrame::Mesh(b0, b1),
-            None => BoxFrame::World,
-        };
-        let pa = RigidPiece::new(a, a0, a1, frame, owner == Some(true));
-        let pb = RigidPiece::new(b, b0, b1, frame, owner == Some(false));
-        let hit = first_impact(&pa, &pb, &tol, frame.max_norm_growth(), &mut ws.descent);
-        ws.triangle_pairs = ws.descent.triangle_pairs;
-        if let Some(hit) = hit {
-            return Ok(Some(TimeOfImpact {
-                time: ((k as f64 + hit.time as f64) / pieces as f64) as f32,
-                ..hit
-            }));
-        }
-    }
-    Ok(None)
+    let sa = RigidStep::new(a, *motion_a, pieces, frame, owner == Some(true));
+    let sb = RigidStep::new(b, *motion_b, pieces, frame, owner == Some(false));
+    let hit = first_impact(&sa, &sb, &tol, frame.max_norm_growth(), &mut ws.descent);
+    ws.triangle_pairs = ws.descent.triangle_pairs;
+    Ok(hit)
 }
 
 /// The first time of impact of two deforming meshes whose vertices move linearly from their
@@ -308,11 +288,11 @@ pub fn deforming_time_of_impact(
         time: options.time_tolerance.max(0.0) as f64,
         ..Default::default()
     };
-    let pa = DeformingPiece {
+    let pa = DeformingStep {
         start: a.0,
         end: a.1,
     };
-    let pb = DeformingPiece {
+    let pb = DeformingStep {
         start: b.0,
         end: b.1,
     };

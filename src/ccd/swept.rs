@@ -1,47 +1,51 @@
-//! A mesh as the continuous query sees it over one piece of the step: the boxes its BVH nodes
-//! sweep and the straight paths of its vertices.
+//! A mesh as the continuous query sees it over the step: the step cut into pieces over which
+//! its vertices move on straight paths, the boxes its BVH nodes sweep over any run of pieces,
+//! and its vertices' paths over each piece.
 
-use super::primitive::Trajectory;
-use super::window::MovingBox;
-use crate::bvh::{Bvh, CollisionMesh};
-use crate::geometry::{Aabb, Pose, PoseF64};
+use std::cell::OnceCell;
+
 use glam::{DMat3, DQuat, DVec3, Mat3, Vec3};
 
-/// A rigid mesh between two poses (the ends of one piece of the step): its vertices move on
-/// the chords between their positions at both poses. Its node boxes are given in the piece's
-/// [`BoxFrame`].
-pub(crate) struct RigidPiece<'a> {
-    pub mesh: &'a CollisionMesh,
-    /// `None`: the node boxes are the tree's own (the mesh is the frame).
-    start: Option<BoxTransform>,
-    /// `None` when the boxes do not move over the piece.
-    end: Option<BoxTransform>,
-    start64: PoseF64,
-    end64: PoseF64,
+use super::primitive::Trajectory;
+use super::query::RigidMotion;
+use super::window::MovingBox;
+use crate::bvh::{Bvh, CollisionMesh};
+use crate::geometry::{Aabb, PoseF64};
+
+/// A run of consecutive pieces of the step, `[first, end)`.
+pub(crate) type Span = (u32, u32);
+
+/// What the query reads of a moving mesh over the step.
+pub(crate) trait SweptMesh {
+    /// The tree (its structure; boxes through [`SweptMesh::node_box`]).
+    fn bvh(&self) -> &Bvh;
+    /// The mesh's triangles.
+    fn triangles(&self) -> &[[u32; 3]];
+    /// How many pieces the step is cut into.
+    fn pieces(&self) -> u32;
+    /// Node `i`'s box over the pieces of `span`, in the step's frame, moving linearly from the
+    /// span's start to its end: the node's vertices, moving on their paths over each piece of
+    /// the span, stay inside it.
+    fn node_box(&self, i: usize, span: Span) -> MovingBox;
+    /// How much [`SweptMesh::node_box`] is grown over `span` for the mesh's turning (0 over
+    /// one piece).
+    fn turn_slack(&self, span: Span) -> f64;
+    /// Vertex `v`'s straight path over piece `piece`.
+    fn vertex(&self, v: u32, piece: u32) -> Trajectory;
 }
 
-/// The frame in which both meshes' node boxes move over a piece. A box holds a vertex's path
-/// only in a frame where that path is straight: the world, or the frame of a mesh that does
-/// not turn (its translation is linear in time, so the world's straight paths stay straight
-/// in it).
+/// The frame in which both meshes' node boxes move. A box holds a vertex's path only in a
+/// frame where that path is straight: the world, or the frame of a mesh that does not turn
+/// (its translation is linear in time, so the world's straight paths stay straight in it).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum BoxFrame {
     /// World coordinates.
     World,
-    /// The frame of a mesh that moves from the first pose to the second over the piece without
-    /// turning.
-    Mesh(Pose, Pose),
+    /// The frame of a mesh that moves so over the step, without turning.
+    Mesh(RigidMotion),
 }
 
 impl BoxFrame {
-    /// The frame's pose at the piece's start and end (`None` for the world).
-    fn poses(&self) -> Option<(PoseF64, PoseF64)> {
-        match self {
-            BoxFrame::World => None,
-            BoxFrame::Mesh(s, e) => Some((s.to_f64(), e.to_f64())),
-        }
-    }
-
     /// How much a distance in the max norm of world coordinates can grow in the max norm of
     /// the frame's (the frame may be turned): `√3`, or 1 in the world.
     pub fn max_norm_growth(&self) -> f64 {
@@ -52,43 +56,130 @@ impl BoxFrame {
     }
 }
 
-impl<'a> RigidPiece<'a> {
-    /// The mesh moving from `start` to `end` over the piece, its boxes in `frame`; `own` when
-    /// the frame is this mesh's (its boxes are then the tree's own).
+/// A rigid mesh moving over the step, cut into `pieces`: over each its vertices move on the
+/// chords between their positions at the piece's ends. Its node boxes are in the step's
+/// [`BoxFrame`].
+pub(crate) struct RigidStep<'a> {
+    mesh: &'a CollisionMesh,
+    motion: RigidMotion,
+    frame: BoxFrame,
+    /// The frame is this mesh's: its boxes are the tree's own.
+    own: bool,
+    pieces: u32,
+    /// How far a vertex is from the mesh's origin, at most.
+    radius: f64,
+    /// The angle turned over the whole step.
+    angle: f64,
+    /// Per piece boundary `k`: the mesh's pose in the frame (for its boxes) and in the world
+    /// (for its vertices), worked out when first read.
+    in_frame: Vec<OnceCell<BoxTransform>>,
+    in_world: Vec<OnceCell<PoseF64>>,
+}
+
+impl<'a> RigidStep<'a> {
+    /// `mesh` moving by `motion`, cut into `pieces`, its boxes in `frame` (`own`: the frame is
+    /// this mesh's).
     pub fn new(
         mesh: &'a CollisionMesh,
-        start: Pose,
-        end: Pose,
+        motion: RigidMotion,
+        pieces: u32,
         frame: BoxFrame,
         own: bool,
     ) -> Self {
-        let (start64, end64) = (start.to_f64(), end.to_f64());
-        let relative = |pose: &PoseF64, frame: &PoseF64| {
-            let inv = frame.inverse();
-            BoxTransform::new_f64(
-                (inv.rotation * pose.rotation).normalize(),
-                inv.rotation * pose.translation + inv.translation,
-            )
-        };
-        let (start_box, end_box) = match (own, frame.poses()) {
-            (true, _) => (None, None),
-            (false, None) => (
-                Some(BoxTransform::new_f64(start64.rotation, start64.translation)),
-                (end != start).then(|| BoxTransform::new_f64(end64.rotation, end64.translation)),
-            ),
-            (false, Some((f0, f1))) => (Some(relative(&start64, &f0)), Some(relative(&end64, &f1))),
-        };
+        let boundaries = pieces as usize + 1;
         Self {
             mesh,
-            start: start_box,
-            end: end_box,
-            start64,
-            end64,
+            motion,
+            frame,
+            own,
+            pieces,
+            radius: mesh_radius(mesh),
+            angle: motion.angle(),
+            in_frame: (0..boundaries).map(|_| OnceCell::new()).collect(),
+            in_world: (0..boundaries).map(|_| OnceCell::new()).collect(),
         }
+    }
+
+    /// The time of boundary `k` (as the pieces are cut: `k / pieces` in `f32`).
+    fn boundary_time(&self, k: u32) -> f32 {
+        k as f32 / self.pieces as f32
+    }
+
+    fn world_pose(&self, k: u32) -> &PoseF64 {
+        self.in_world[k as usize].get_or_init(|| self.motion.at(self.boundary_time(k)).to_f64())
+    }
+
+    fn frame_transform(&self, k: u32) -> &BoxTransform {
+        self.in_frame[k as usize].get_or_init(|| {
+            let pose = *self.world_pose(k);
+            match self.frame {
+                BoxFrame::World => BoxTransform::new(pose.rotation, pose.translation),
+                BoxFrame::Mesh(frame) => {
+                    let inv = frame.at(self.boundary_time(k)).to_f64().inverse();
+                    BoxTransform::new(
+                        (inv.rotation * pose.rotation).normalize(),
+                        inv.rotation * pose.translation + inv.translation,
+                    )
+                }
+            }
+        })
     }
 }
 
-/// [`Pose::transform_aabb`] with the pose's matrices worked out once.
+impl SweptMesh for RigidStep<'_> {
+    fn bvh(&self) -> &Bvh {
+        self.mesh.bvh()
+    }
+
+    fn triangles(&self) -> &[[u32; 3]] {
+        self.mesh.mesh().triangles()
+    }
+
+    fn pieces(&self) -> u32 {
+        self.pieces
+    }
+
+    fn node_box(&self, i: usize, span: Span) -> MovingBox {
+        let local = self.mesh.bvh().nodes()[i].aabb();
+        if self.own {
+            let b = rounding_grown(local);
+            return MovingBox::new(&b, &b);
+        }
+        // The node's boxes at the span's ends hold its vertices there; the box between them
+        // holds the chords between those ends, and grown by how far an arc strays from its
+        // chord over the span, every piece's chords (each lies between two points of the arc).
+        let slack = self.turn_slack(span) as f32;
+        let at = |k: u32| {
+            let b = self.frame_transform(k).apply(&local);
+            rounding_grown(b.inflated(slack))
+        };
+        MovingBox::new(&at(span.0), &at(span.1))
+    }
+
+    fn turn_slack(&self, span: Span) -> f64 {
+        if span.1 - span.0 <= 1 || self.angle == 0.0 {
+            return 0.0;
+        }
+        let turned = self.angle * (span.1 - span.0) as f64 / self.pieces as f64;
+        // A vertex at time s on its arc against the point at s on the chord between the span's
+        // ends: across the chord by at most the sagitta, along it by `r |sin(θu) − 2u sin(θ/2)|`
+        // (u = s − ½ in span time), which stays below `r θ³ / 12` for θ ≤ π. Rounded up a
+        // little: the box must hold the arc.
+        let along = self.radius * turned.powi(3) / 12.0;
+        (chord_deviation(self.radius, turned) + along) * (1.0 + 1e-6) + 1e-12 * self.radius
+    }
+
+    fn vertex(&self, v: u32, piece: u32) -> Trajectory {
+        let p = self.mesh.mesh().positions()[v as usize];
+        Trajectory::new(
+            self.world_pose(piece).transform_point(p),
+            self.world_pose(piece + 1).transform_point(p),
+        )
+    }
+}
+
+/// [`Pose::transform_aabb`](crate::geometry::Pose::transform_aabb) for a pose worked out in
+/// `f64`, its matrices computed once.
 struct BoxTransform {
     rotation: Mat3,
     abs: Mat3,
@@ -96,7 +187,7 @@ struct BoxTransform {
 }
 
 impl BoxTransform {
-    fn new_f64(rotation: DQuat, translation: DVec3) -> Self {
+    fn new(rotation: DQuat, translation: DVec3) -> Self {
         let m = DMat3::from_quat(rotation).as_mat3();
         Self {
             rotation: m,
@@ -112,59 +203,14 @@ impl BoxTransform {
     }
 }
 
-/// What the query reads of a moving mesh over a piece of the step.
-pub(crate) trait SweptMesh {
-    /// The tree (its structure; boxes through [`SweptMesh::node_box`]).
-    fn bvh(&self) -> &Bvh;
-    /// The mesh's triangles.
-    fn triangles(&self) -> &[[u32; 3]];
-    /// Node `i`'s box at each time of the piece, in the piece's frame: its vertices, moving on
-    /// their paths, stay inside it.
-    fn node_box(&self, i: usize) -> MovingBox;
-    /// Vertex `v`'s path over the piece.
-    fn vertex(&self, v: u32) -> Trajectory;
-}
-
-impl SweptMesh for RigidPiece<'_> {
-    fn bvh(&self) -> &Bvh {
-        self.mesh.bvh()
-    }
-
-    fn triangles(&self) -> &[[u32; 3]] {
-        self.mesh.mesh().triangles()
-    }
-
-    fn node_box(&self, i: usize) -> MovingBox {
-        let local = self.mesh.bvh().nodes()[i].aabb();
-        // The node's boxes at both poses hold its vertices' chords' ends, so the box between
-        // them holds the chords.
-        let b0 = rounding_grown(match &self.start {
-            Some(start) => start.apply(&local),
-            None => local,
-        });
-        match &self.end {
-            Some(end) => MovingBox::new(&b0, &rounding_grown(end.apply(&local))),
-            None => MovingBox::new(&b0, &b0),
-        }
-    }
-
-    fn vertex(&self, v: u32) -> Trajectory {
-        let p = self.mesh.mesh().positions()[v as usize];
-        Trajectory::new(
-            self.start64.transform_point(p),
-            self.end64.transform_point(p),
-        )
-    }
-}
-
 /// A deforming mesh between two sets of vertex positions with one tree structure: every
-/// vertex moves on the straight line between its positions.
-pub(crate) struct DeformingPiece<'a> {
+/// vertex moves on the straight line between its positions (one piece).
+pub(crate) struct DeformingStep<'a> {
     pub start: &'a CollisionMesh,
     pub end: &'a CollisionMesh,
 }
 
-impl SweptMesh for DeformingPiece<'_> {
+impl SweptMesh for DeformingStep<'_> {
     fn bvh(&self) -> &Bvh {
         self.start.bvh()
     }
@@ -173,7 +219,11 @@ impl SweptMesh for DeformingPiece<'_> {
         self.start.mesh().triangles()
     }
 
-    fn node_box(&self, i: usize) -> MovingBox {
+    fn pieces(&self) -> u32 {
+        1
+    }
+
+    fn node_box(&self, i: usize, _span: Span) -> MovingBox {
         // Both trees have the same structure (checked by the caller): node i bounds the same
         // triangles at both ends.
         MovingBox::new(
@@ -182,7 +232,11 @@ impl SweptMesh for DeformingPiece<'_> {
         )
     }
 
-    fn vertex(&self, v: u32) -> Trajectory {
+    fn turn_slack(&self, _span: Span) -> f64 {
+        0.0
+    }
+
+    fn vertex(&self, v: u32, _piece: u32) -> Trajectory {
         let (p, q) = (
             self.start.mesh().positions()[v as usize],
             self.end.mesh().positions()[v as usize],
@@ -208,4 +262,58 @@ pub(crate) fn mesh_radius(mesh: &CollisionMesh) -> f64 {
     let b = mesh.bvh().root_aabb();
     let far = b.min.abs().max(b.max.abs());
     far.as_dvec3().length()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::Pose;
+    use crate::mesh::generate;
+    use glam::{Quat, Vec3};
+
+    #[test]
+    fn a_turning_meshs_boxes_over_a_run_of_pieces_hold_every_pieces_paths() {
+        // Off-centre so that the radius is not the sphere's; turns up to half a turn.
+        let mesh = CollisionMesh::new(
+            generate::icosphere(0.5, 1)
+                .translated(Vec3::new(0.7, -0.2, 0.1))
+                .expect("finite"),
+        );
+        for (angle, pieces) in [(0.3f32, 16u32), (1.5, 9), (3.1, 24)] {
+            let motion = RigidMotion::new(
+                Pose::new(Vec3::new(1.0, 2.0, 3.0), Quat::from_rotation_x(0.4)),
+                Pose::new(
+                    Vec3::new(2.0, 1.0, 3.5),
+                    Quat::from_axis_angle(Vec3::new(1.0, 2.0, -0.5).normalize(), angle)
+                        * Quat::from_rotation_x(0.4),
+                ),
+            );
+            let step = RigidStep::new(&mesh, motion, pieces, BoxFrame::World, false);
+            let nodes = mesh.bvh().nodes();
+            for span in [(0, pieces), (1, pieces / 2 + 1), (pieces / 3, pieces)] {
+                for (i, node) in nodes.iter().enumerate().filter(|(_, n)| n.is_leaf()) {
+                    let moving = step.node_box(i, span);
+                    for &t in mesh.bvh().triangles_of(node) {
+                        for v in mesh.mesh().triangles()[t as usize] {
+                            for piece in span.0..span.1 {
+                                let path = step.vertex(v, piece);
+                                for k in 0..=8 {
+                                    let s = k as f64 / 8.0;
+                                    let u = (piece as f64 + s - span.0 as f64)
+                                        / (span.1 - span.0) as f64;
+                                    let (lo, hi) = moving.at(u);
+                                    let p = path.at(s);
+                                    let slop = DVec3::splat(1e-9);
+                                    assert!(
+                                        (p + slop).cmpge(lo).all() && (p - slop).cmple(hi).all(),
+                                        "angle {angle}, span {span:?}, node {i}: {p} not in {lo}..{hi}"
+                                    );
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

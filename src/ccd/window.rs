@@ -52,6 +52,17 @@ impl MovingBox {
         b
     }
 
+    /// The box's corners at time `s` of its piece.
+    #[cfg(test)]
+    pub fn at(&self, s: f64) -> (DVec3, DVec3) {
+        (self.lo0.lerp(self.lo1, s), self.hi0.lerp(self.hi1, s))
+    }
+
+    /// The longest side of the box around both ends.
+    pub fn largest_side(&self) -> f64 {
+        (self.hi0.max(self.hi1) - self.lo0.min(self.lo1)).max_element()
+    }
+
     /// A size measure of the box over the piece (half the surface area of the box around both
     /// ends): the larger of two boxes is the one to split.
     pub fn size(&self) -> f64 {
