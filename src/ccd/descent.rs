@@ -1,6 +1,7 @@
-//! The search for the earliest contact over one piece of the step: both trees descended
-//! together, node pairs taken in the order of the earliest time their moving boxes can meet,
-//! so that the search stops as soon as no pair left can meet before the earliest contact found.
+//! The search for the earliest contact over the step: both trees descended together, node
+//! pairs (over runs of the step's pieces) taken in the order of the earliest time their moving
+//! boxes can meet, so that the search stops as soon as no pair left can meet before the
+//! earliest contact found.
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 

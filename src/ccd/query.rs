@@ -169,11 +169,14 @@ impl CcdWorkspace {
 /// start have time 0. Surfaces are what collide, as in the discrete [`intersects`]: a mesh
 /// wholly inside another at the start does not touch it.
 ///
-/// Every vertex–face and edge–edge pair whose swept boxes meet is solved by an inclusion-based
-/// root finder (see [`vertex_face_time`]); a rotating mesh's step is cut into pieces short
-/// enough that its vertices' paths are straight within the tolerance.
+/// A rotating mesh's step is cut into pieces short enough that its vertices' paths are straight
+/// within the tolerance. Node pairs are searched earliest first by the time their moving boxes
+/// can meet, and the search ends when none left can meet before the earliest contact found;
+/// every vertex–face and edge–edge pair whose boxes meet before then is solved by an
+/// inclusion-based root finder (see [`vertex_face_time`]).
 ///
 /// [`intersects`]: crate::bvh::intersects
+/// [`vertex_face_time`]: crate::ccd::vertex_face_time
 ///
 /// # Example
 /// A ball that passes through a thin wall within one step, which no discrete test sees:
