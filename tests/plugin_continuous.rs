@@ -3,6 +3,9 @@
 //! through a thin wall unseen by the discrete test; with `ContinuousCollision` the contact is
 //! reported, with the time of impact of a reference computed from the ball's path, and the
 //! impulse response sends the ball back from the wall. `WhenFast` sweeps only fast motion.
+//! With ADB fidelity the pair is swept with the time-critical continuous query: exact without
+//! a budget, and under a budget too small to settle it the conservative query still reports
+//! the crossing, never later than it happens.
 #![cfg(feature = "transform")]
 mod plugin_support;
 
@@ -37,6 +40,17 @@ fn scene(
     speed: f32,
     response: bool,
 ) -> (App, Entity) {
+    adb_scene(continuous, x0, speed, response, Fidelity::Exact)
+}
+
+/// [`scene`] with both colliders at `fidelity`.
+fn adb_scene(
+    continuous: Option<ContinuousCollision>,
+    x0: f32,
+    speed: f32,
+    response: bool,
+    fidelity: Fidelity,
+) -> (App, Entity) {
     let mut app = game();
     app.init_resource::<Starts>().add_systems(Last, record);
     if response {
@@ -59,14 +73,14 @@ fn scene(
         );
     }
     let wall = MeshCollider::new(generate::cuboid(Vec3::new(WALL_HALF, 2.0, 2.0), 4));
-    spawn(&mut app, (wall, Transform::default(), Fidelity::Exact));
+    spawn(&mut app, (wall, Transform::default(), fidelity));
     let ball = app
         .world_mut()
         .spawn((
             MeshCollider::new(generate::icosphere(RADIUS, 2)),
             Transform::from_xyz(x0, 0.0, 0.0),
             BodyVelocity(Vec3::X * speed),
-            Fidelity::Exact,
+            fidelity,
         ))
         .id();
     if let Some(c) = continuous {
@@ -144,4 +158,44 @@ fn the_impulse_response_sends_a_swept_ball_back_from_the_wall() {
     steps(&mut app, 4);
     let x = app.world().get::<Transform>(ball).unwrap().translation.x;
     assert!(x > 2.0, "{x}");
+}
+
+#[test]
+fn adb_pairs_are_swept_with_the_time_critical_query() {
+    let travel = SPEED * DEFAULT_STEP;
+    // The surfaces meet when the centre is at -(WALL_HALF + RADIUS) at the latest.
+    let latest = (-(WALL_HALF + 0.9 * RADIUS) + 2.0) / travel;
+    let adb = Fidelity::Adb { p_min: 0.99 };
+    for (budget, conservative, settled) in [
+        (FrameBudget::Unlimited, true, true),
+        (FrameBudget::NodePairs(8), true, false),
+        (FrameBudget::NodePairs(8), false, false),
+    ] {
+        let (mut app, _) = adb_scene(Some(ContinuousCollision::Always), START, SPEED, false, adb);
+        {
+            let mut config = app.world_mut().resource_mut::<CollisionConfig>();
+            config.budget = budget;
+            config.continuous_adb_conservative = conservative;
+        }
+        steps(&mut app, 6);
+        let starts = &app.world().resource::<Starts>().0;
+        let d = app.world().resource::<CollisionDiagnostics>().counters;
+        assert!(d.swept_pairs >= 1, "{budget:?}: {d:?}");
+        if !conservative {
+            // The estimate may or may not say "collision": only what it says is checked.
+            for s in starts {
+                assert!(s.time_of_impact.is_some_and(|t| t <= latest), "{s:?}");
+            }
+            continue;
+        }
+        assert_eq!(starts.len(), 1, "{budget:?}: one contact, {starts:?}");
+        let s = starts[0];
+        let t = s.time_of_impact.expect("a time of impact");
+        assert!(t <= latest, "{budget:?}: {t} after {latest}");
+        // Settled: the exact answer, probability 1; cut short: earlier, an estimate below 1.
+        assert_eq!(s.probability == 1.0, settled, "{budget:?}: {s:?}");
+        if settled {
+            assert!(t >= (-(WALL_HALF + RADIUS) + 2.0) / travel - 1e-4, "{t}");
+        }
+    }
 }

@@ -2,7 +2,9 @@
 //! at 10× the cannonball's speed against a wall a tenth of the ball's diameter thick tunnel
 //! through it under the discrete exact test; with `ContinuousCollision` every shot the
 //! sub-stepped reference sees touching the wall is detected, in the reference's frame, never
-//! later, and none is invented. Bad arguments are errors.
+//! later, and none is invented; with ADB pairs and the conservative time-critical continuous
+//! query the same holds at the plugin's default budget and at a tight work budget. Bad
+//! arguments are errors.
 #[path = "../examples/support/mod.rs"]
 mod support;
 
@@ -38,6 +40,14 @@ fn continuous_collision_catches_every_shot_the_discrete_test_lets_through() {
         r.worst_time_error <= 2.0 / support::tunnel::REFERENCE_SUBSTEPS as f32,
         "{r}"
     );
+    // The ADB runs: the conservative ones (default time budget, then a tight work budget)
+    // detect every shot, in its frame, never late; the estimating one is only reported.
+    assert_eq!(r.adb.len(), 3, "{r}");
+    for run in &r.adb[..2] {
+        assert_eq!(run.verdicts.detected, r.crossing, "{}: {r}", run.name);
+        assert_eq!(run.verdicts.same_run, r.crossing, "{}: {r}", run.name);
+        assert_eq!(run.late, 0, "{}: {r}", run.name);
+    }
     let svg = std::fs::read_to_string(r.picture.as_ref().expect("picture written")).unwrap();
     assert_eq!(svg.matches("<circle").count(), 2 * r.crossing);
     std::fs::remove_dir_all(dir).ok();
@@ -50,6 +60,8 @@ fn bad_arguments_are_errors() {
     assert!(parse(&["--speed", "fast"]).is_err());
     assert!(parse(&["--shots"]).is_err());
     assert!(parse(&["--bogus", "1"]).is_err());
+    assert!(parse(&["--adb-budget", "-3"]).is_err());
+    assert_eq!(parse(&["--adb-budget", "40"]).unwrap().adb_budget, 40);
     let a = parse(&["--speed", "3", "--shots", "12", "--seed", "9"]).unwrap();
     assert_eq!((a.speed, a.shots, a.seed), (3.0, 12, 9));
 }

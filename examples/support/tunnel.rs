@@ -1,7 +1,9 @@
 //! Tunnel: cannonball shots at a multiple of their speed against a wall a tenth of the ball's
 //! diameter thick, with the discrete exact test and with continuous collision
-//! (`ContinuousCollision`), each against a reference that sub-steps every frame with the exact
-//! query. The `tunnel` example's run ([`run`]) and its side view ([`picture`]).
+//! (`ContinuousCollision`): exact, and ADB pairs with the time-critical continuous query
+//! (conservative and estimating, within a work budget; conservative at the plugin's default
+//! time budget), each against a reference that sub-steps every frame with the exact query. The
+//! `tunnel` example's run ([`run`]) and its side view ([`picture`]).
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -36,6 +38,8 @@ pub struct Args {
     pub frames: usize,
     pub seed: u64,
     pub svg: PathBuf,
+    /// ADB node pairs per run of the budgeted ADB runs.
+    pub adb_budget: u64,
     pub help: bool,
 }
 
@@ -47,6 +51,7 @@ impl Default for Args {
             frames: 30,
             seed: 1,
             svg: PathBuf::from("target/tunnel.svg"),
+            adb_budget: 100,
             help: false,
         }
     }
@@ -54,10 +59,11 @@ impl Default for Args {
 
 /// Usage of the `tunnel` example.
 pub const USAGE: &str = "usage: tunnel [--shots N (300)] [--speed K (10: times the cannonball's)] \
-                         [--frames N (30)] [--seed S (1)] [--svg PATH (target/tunnel.svg)]";
+                         [--frames N (30)] [--seed S (1)] [--svg PATH (target/tunnel.svg)] \
+                         [--adb-budget N (100 ADB node pairs per run)]";
 
 impl Args {
-    /// Parses `--shots`, `--speed`, `--frames`, `--seed`, `--svg`, `-h`.
+    /// Parses `--shots`, `--speed`, `--frames`, `--seed`, `--svg`, `--adb-budget`, `-h`.
     pub fn parse<I: IntoIterator<Item = String>>(args: I) -> Result<Args, String> {
         let mut parsed = Args::default();
         let mut it = args.into_iter();
@@ -84,6 +90,7 @@ impl Args {
                         .map_err(|_| format!("--seed: `{value}` is not a seed"))?
                 }
                 "--svg" => parsed.svg = PathBuf::from(value),
+                "--adb-budget" => parsed.adb_budget = number("count")? as u64,
                 other => return Err(format!("unknown flag {other}")),
             }
         }
@@ -171,16 +178,52 @@ pub struct Flight {
     pub caught_by_sweep: u64,
 }
 
-/// Flies the shots with the plugin, the wall tested exactly, the balls swept or not.
-pub fn fly_shots(args: &Args, continuous: Option<ContinuousCollision>) -> Flight {
+/// How a flight tests the balls against the wall.
+#[derive(Debug, Clone, Copy)]
+pub struct Setup {
+    pub continuous: Option<ContinuousCollision>,
+    /// Exact, or ADB (`p_min` 0.99).
+    pub adb: bool,
+    /// The plugin's budget: ADB node pairs per run, else a time per run in µs (0: unlimited).
+    pub node_budget: Option<u64>,
+    pub budget_us: u64,
+    /// `CollisionConfig::continuous_adb_conservative`.
+    pub conservative: bool,
+}
+
+impl Setup {
+    /// The wall tested exactly, no budget.
+    pub fn exact(continuous: Option<ContinuousCollision>) -> Self {
+        Self {
+            continuous,
+            adb: false,
+            node_budget: None,
+            budget_us: 0,
+            conservative: true,
+        }
+    }
+}
+
+/// Flies the shots with the plugin, the wall tested as `setup` says, the balls swept or not.
+pub fn fly_shots(args: &Args, setup: Setup) -> Flight {
+    let fidelity = if setup.adb {
+        Fidelity::Adb { p_min: 0.99 }
+    } else {
+        Fidelity::Exact
+    };
     let options = Options {
-        budget_us: 0,
+        budget_us: setup.budget_us,
+        node_budget: setup.node_budget,
         seed: args.seed,
-        fidelity: Some(Fidelity::Exact),
+        fidelity: Some(fidelity),
         ..Options::default()
     };
+    let config = CollisionConfig {
+        continuous_adb_conservative: setup.conservative,
+        ..options.config()
+    };
     let mut app = App::new();
-    app.add_plugins(options.plugin())
+    app.add_plugins(options.plugin().with_config(config))
         .add_systems(PostUpdate, fly.before(CollisionSystems::Prepare))
         .add_systems(PostUpdate, stop_at_wall.in_set(CollisionSystems::Response));
     let world = app.world_mut();
@@ -188,7 +231,7 @@ pub fn fly_shots(args: &Args, continuous: Option<ContinuousCollision>) -> Flight
     world.spawn((
         MeshCollider::new(wall_mesh()),
         ColliderPose(wall_pose()),
-        Fidelity::Exact,
+        fidelity,
     ));
     let ball = MeshCollider::new(ball_mesh());
     for (index, (start, velocity)) in shots(args).into_iter().enumerate() {
@@ -205,7 +248,7 @@ pub fn fly_shots(args: &Args, continuous: Option<ContinuousCollision>) -> Flight
             // Shots do not collide with each other.
             ContactLayers::new(0b10, 0b01),
         ));
-        if let Some(c) = continuous {
+        if let Some(c) = setup.continuous {
             e.insert(c);
         }
     }
@@ -295,7 +338,21 @@ pub struct Report {
     /// Of those, how many report a time of impact later than the reference's first sub-step
     /// in contact (the continuous query must never be late).
     pub late: usize,
+    /// The runs with ADB pairs swept by the time-critical continuous query.
+    pub adb: Vec<AdbRun>,
     pub picture: Result<PathBuf, String>,
+}
+
+/// A flight with ADB pairs and `ContinuousCollision::Always`.
+#[derive(Debug, Clone)]
+pub struct AdbRun {
+    pub name: String,
+    pub verdicts: Verdicts,
+    pub ms: f64,
+    pub swept_pairs: u64,
+    /// Contacts reported in the reference's run later in it than the reference's time of
+    /// impact (the conservative query must never be late).
+    pub late: usize,
 }
 
 /// How one run's contacts compare with the reference.
@@ -329,8 +386,54 @@ pub fn run(args: &Args) -> Report {
     let t = Instant::now();
     let reference = reference(args);
     let reference_s = t.elapsed().as_secs_f64();
-    let discrete = fly_shots(args, None);
-    let continuous = fly_shots(args, Some(ContinuousCollision::Always));
+    let discrete = fly_shots(args, Setup::exact(None));
+    let continuous = fly_shots(args, Setup::exact(Some(ContinuousCollision::Always)));
+    let adb = |name: String, node_budget: Option<u64>, conservative: bool| {
+        let setup = Setup {
+            continuous: Some(ContinuousCollision::Always),
+            adb: true,
+            node_budget,
+            budget_us: 2000,
+            conservative,
+        };
+        let flight = fly_shots(args, setup);
+        let late = flight
+            .shots
+            .iter()
+            .zip(&reference)
+            .filter(|(s, r)| match (s.hit, r) {
+                (Some((run, toi)), Some((ref_run, ref_t))) => {
+                    run == *ref_run && toi.unwrap_or(1.0) > *ref_t + 1e-6
+                }
+                _ => false,
+            })
+            .count();
+        AdbRun {
+            name,
+            verdicts: verdicts(&flight, &reference),
+            ms: flight.collision_ms,
+            swept_pairs: flight.swept_pairs,
+            late,
+        }
+    };
+    let n = args.adb_budget;
+    let adb = vec![
+        adb(
+            "continuous (ADB, conservative, the default 2000 µs budget)".to_owned(),
+            None,
+            true,
+        ),
+        adb(
+            format!("continuous (ADB, conservative, {n} node pairs per run)"),
+            Some(n),
+            true,
+        ),
+        adb(
+            format!("continuous (ADB, estimating, {n} node pairs per run)"),
+            Some(n),
+            false,
+        ),
+    ];
     // Continuous time of impact less the reference's, for shots found in the same run.
     let offsets: Vec<f32> = continuous
         .shots
@@ -356,6 +459,7 @@ pub fn run(args: &Args) -> Report {
         reference_s,
         worst_time_error,
         late,
+        adb,
         picture,
     }
 }
@@ -402,6 +506,21 @@ impl fmt::Display for Report {
             1.0 / REFERENCE_SUBSTEPS as f32,
             self.late
         )?;
+        for r in &self.adb {
+            writeln!(
+                f,
+                "  {}: detected {} of {} ({} in the reference's frame), {} tunnelled, {} false, {} later than the reference; {} pairs swept; collision stages {:.1} ms in all",
+                r.name,
+                r.verdicts.detected,
+                self.crossing,
+                r.verdicts.same_run,
+                self.crossing - r.verdicts.detected,
+                r.verdicts.false_hits,
+                r.late,
+                r.swept_pairs,
+                r.ms
+            )?;
+        }
         match &self.picture {
             Ok(p) => writeln!(f, "  side view: {}", p.display()),
             Err(e) => writeln!(f, "  no picture: {e}"),

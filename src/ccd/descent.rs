@@ -84,6 +84,89 @@ pub(crate) fn first_impact(
     growth: f64,
     ws: &mut DescentScratch,
 ) -> Option<TimeOfImpact> {
+    search(a, b, tol, growth, &mut SearchLimit::default(), ws).hit
+}
+
+/// When a search must stop before it has settled its answer.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct SearchLimit {
+    /// Queue pops allowed (`None`: no limit).
+    pub pops: Option<u64>,
+    /// Instant after which the search stops (read every 16 pops).
+    pub deadline: Option<std::time::Instant>,
+}
+
+/// What a search found, and whether it finished.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct SearchEnd {
+    /// The earliest contact found (the earliest there is when `settled`).
+    pub hit: Option<TimeOfImpact>,
+    /// The search ran to its end: `hit` is the answer. Otherwise the node pairs left in the
+    /// queue ([`DescentScratch::frontier`]) may hold an earlier contact.
+    pub settled: bool,
+    /// Queue pops made.
+    pub pops: u64,
+    /// Step times at or after this cannot change the answer (the frontier is what lies before).
+    pub until: f64,
+}
+
+/// A node pair the search left unexplored: its nodes, when its boxes can first meet, and when
+/// within its window its boxes' centres come closest and how close (step time).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct FrontierPair {
+    pub a: u32,
+    pub b: u32,
+    pub from: f64,
+    pub at: f64,
+    pub centre_distance: f64,
+}
+
+impl DescentScratch {
+    /// The node pairs left in the queue whose window starts before `until`.
+    pub(crate) fn frontier(
+        &self,
+        pieces: u32,
+        until: f64,
+    ) -> impl Iterator<Item = FrontierPair> + '_ {
+        self.queue
+            .iter()
+            .filter(move |p| p.from < until)
+            .map(move |p| {
+                let (ba, bb) = (&self.boxes[p.box_a as usize], &self.boxes[p.box_b as usize]);
+                let (k0, k1) = (p.span.0 as f64, p.span.1 as f64);
+                let n = pieces as f64;
+                let to_span = |t: f64| ((t * n - k0) / (k1 - k0)).clamp(0.0, 1.0);
+                let (u0, u1) = (to_span(p.from), to_span(p.to.min(until)));
+                // The centres move linearly over the span: their difference d(u) = d0 + u (d1 - d0)
+                // is shortest at the clamped foot of the origin on that line.
+                let (ca, cb) = (ba.centres(), bb.centres());
+                let (d0, d1) = (cb.0 - ca.0, cb.1 - ca.1);
+                let dd = d1 - d0;
+                let u = if dd.length_squared() > 0.0 {
+                    (-d0.dot(dd) / dd.length_squared()).clamp(u0, u1)
+                } else {
+                    u0
+                };
+                FrontierPair {
+                    a: p.a,
+                    b: p.b,
+                    from: p.from,
+                    at: (k0 + u * (k1 - k0)) / n,
+                    centre_distance: (d0 + u * dd).length(),
+                }
+            })
+    }
+}
+
+/// [`first_impact`] within `stop`: the earliest contact found, and whether the search settled.
+pub(crate) fn search(
+    a: &impl SweptMesh,
+    b: &impl SweptMesh,
+    tol: &PrimitiveTolerances,
+    growth: f64,
+    stop: &mut SearchLimit,
+    ws: &mut DescentScratch,
+) -> SearchEnd {
     let pieces = a.pieces().max(b.pieces()).max(1);
     debug_assert!(a.pieces() == b.pieces() || a.pieces().min(b.pieces()) == 1);
     let margin = tol.distance * 1.01;
@@ -113,12 +196,25 @@ pub(crate) fn first_impact(
         root,
         (0.0, 1.0),
     );
-    while let Some(pair) = ws.queue.pop() {
+    let mut pops = 0u64;
+    let mut settled = true;
+    while let Some(&next) = ws.queue.peek() {
         let until = limit(&best);
-        if pair.from >= until {
+        if next.from >= until {
             // Every pair left starts later: nothing can come before the answer.
             break;
         }
+        let out_of_pops = stop.pops.is_some_and(|n| pops >= n);
+        let out_of_time = pops.is_multiple_of(16)
+            && stop
+                .deadline
+                .is_some_and(|d| std::time::Instant::now() >= d);
+        if out_of_pops || out_of_time {
+            settled = false;
+            break;
+        }
+        pops += 1;
+        let pair = ws.queue.pop().expect("peeked");
         let (ni, nj) = (
             &a.bvh().nodes()[pair.a as usize],
             &b.bvh().nodes()[pair.b as usize],
@@ -196,10 +292,15 @@ pub(crate) fn first_impact(
             push(&mut ws.queue, &ws.boxes, node_margin, pieces, entry, within);
         }
     }
-    best.map(|f| TimeOfImpact {
-        time: f.earliest as f32,
-        ..f.candidate.impact(a, b, f.piece, f.piece_time)
-    })
+    SearchEnd {
+        hit: best.map(|f| TimeOfImpact {
+            time: f.earliest as f32,
+            ..f.candidate.impact(a, b, f.piece, f.piece_time)
+        }),
+        settled,
+        pops,
+        until: limit(&best),
+    }
 }
 
 /// Where a piece lies in the step.

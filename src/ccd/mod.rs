@@ -5,8 +5,11 @@
 //!   to another over the step ([`RigidMotion`]: linear translation, rotation at a constant rate).
 //! - [`deforming_time_of_impact`]: two deforming meshes, each vertex moving linearly between
 //!   two states of the mesh.
+//! - [`adb_time_of_impact`]: two rigid ADB-trees within a budget: the exact answer when the
+//!   search ends in time, else an estimate of the node pairs left (or, conservative, a contact
+//!   whenever one is left) with a confidence.
 //! - [`vertex_face_time`] and [`edge_edge_time`]: one pair of features moving linearly, the
-//!   building block of both.
+//!   building block of all three.
 //!
 //! Every pair of features whose swept boxes meet is decided by an inclusion-based root finder
 //! that never misses a root: the answer is never later than the first contact, and no earlier
@@ -25,6 +28,7 @@ mod inclusion;
 mod primitive;
 mod query;
 mod swept;
+mod time_critical;
 mod window;
 
 pub use primitive::{
@@ -33,4 +37,7 @@ pub use primitive::{
 pub use query::{
     CcdError, CcdOptions, CcdWorkspace, ImpactFeatures, RigidMotion, TimeOfImpact,
     deforming_time_of_impact, time_of_impact,
+};
+pub use time_critical::{
+    ContinuousAdbOutcome, ContinuousAdbQuery, SweptWitness, adb_time_of_impact,
 };

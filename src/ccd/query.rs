@@ -151,8 +151,8 @@ pub enum CcdError {
 /// Reusable scratch memory of the continuous queries.
 #[derive(Debug, Default, Clone)]
 pub struct CcdWorkspace {
-    exact: QueryWorkspace,
-    descent: DescentScratch,
+    pub(crate) exact: QueryWorkspace,
+    pub(crate) descent: DescentScratch,
     /// Triangle pairs tested by the last query (those whose boxes meet within the step).
     pub triangle_pairs: u64,
 }
@@ -207,6 +207,23 @@ pub fn time_of_impact(
     options: &CcdOptions,
     ws: &mut CcdWorkspace,
 ) -> Result<Option<TimeOfImpact>, CcdError> {
+    validate_motions(motion_a, motion_b)?;
+    ws.triangle_pairs = 0;
+    ws.descent.triangle_pairs = 0;
+    if let Some(hit) = overlap_at_start(a, &motion_a.start, b, &motion_b.start, ws) {
+        return Ok(Some(hit));
+    }
+    let step = RigidPair::new((a, motion_a), (b, motion_b), options);
+    let hit = first_impact(&step.a, &step.b, &step.tol, step.growth, &mut ws.descent);
+    ws.triangle_pairs = ws.descent.triangle_pairs;
+    Ok(hit)
+}
+
+/// Refuses motions with a pose that is not finite.
+pub(crate) fn validate_motions(
+    motion_a: &RigidMotion,
+    motion_b: &RigidMotion,
+) -> Result<(), CcdError> {
     for (which, m) in [("first", motion_a), ("second", motion_b)] {
         for (end, pose) in [("start", m.start), ("end", m.end)] {
             if !pose.is_finite() {
@@ -214,47 +231,66 @@ pub fn time_of_impact(
             }
         }
     }
-    ws.triangle_pairs = 0;
-    ws.descent.triangle_pairs = 0;
-    if let Some(hit) = overlap_at_start(a, &motion_a.start, b, &motion_b.start, ws) {
-        return Ok(Some(hit));
-    }
-    let delta = options.distance_tolerance.max(0.0) as f64;
-    let pieces_for = |mesh: &CollisionMesh, m: &RigidMotion| {
-        let angle = m.angle();
-        if angle == 0.0 {
-            return 1u32;
+    Ok(())
+}
+
+/// Two rigid meshes over the step as the search reads them: the step cut into pieces over
+/// which the vertices' paths are straight within the tolerance, the boxes' frame, and the
+/// tolerances of the feature tests.
+pub(crate) struct RigidPair<'a> {
+    pub a: RigidStep<'a>,
+    pub b: RigidStep<'a>,
+    pub tol: PrimitiveTolerances,
+    /// See [`BoxFrame::max_norm_growth`].
+    pub growth: f64,
+    pub pieces: u32,
+}
+
+impl<'a> RigidPair<'a> {
+    pub fn new(
+        (a, motion_a): (&'a CollisionMesh, &RigidMotion),
+        (b, motion_b): (&'a CollisionMesh, &RigidMotion),
+        options: &CcdOptions,
+    ) -> Self {
+        let delta = options.distance_tolerance.max(0.0) as f64;
+        let pieces_for = |mesh: &CollisionMesh, m: &RigidMotion| {
+            let angle = m.angle();
+            if angle == 0.0 {
+                return 1u32;
+            }
+            // Pieces short enough that the sagitta stays within delta / 4 per mesh.
+            let radius = mesh_radius(mesh).max(1e-30);
+            let allowed = 2.0 * (1.0 - (0.25 * delta / radius).min(1.0)).acos();
+            (angle / allowed.max(1e-12))
+                .ceil()
+                .min(options.max_pieces as f64) as u32
+        };
+        let pieces = pieces_for(a, motion_a)
+            .max(pieces_for(b, motion_b))
+            .clamp(1, options.max_pieces.max(1));
+        let stray = chord_deviation(mesh_radius(a), motion_a.angle() / pieces as f64)
+            + chord_deviation(mesh_radius(b), motion_b.angle() / pieces as f64);
+        let tol = PrimitiveTolerances {
+            distance: delta + stray,
+            time: (options.time_tolerance.max(0.0) as f64 * pieces as f64).min(1.0),
+            ..Default::default()
+        };
+        // The node boxes are taken in the frame of a mesh that does not turn: its own boxes
+        // are then the tree's, tight, and only the other mesh's are turned into it.
+        let turns = |m: &RigidMotion| m.start.rotation != m.end.rotation;
+        let (frame, owner) = match (turns(motion_a), turns(motion_b)) {
+            (false, _) => (BoxFrame::Mesh(*motion_a), Some(true)),
+            (true, false) => (BoxFrame::Mesh(*motion_b), Some(false)),
+            (true, true) => (BoxFrame::World, None),
+        };
+        Self {
+            a: RigidStep::new(a, *motion_a, pieces, frame, owner == Some(true)),
+            b: RigidStep::new(b, *motion_b, pieces, frame, owner == Some(false)),
+            tol,
+            growth: frame.max_norm_growth(),
+            pieces,
         }
-        // Pieces short enough that the sagitta stays within delta / 4 per mesh.
-        let radius = mesh_radius(mesh).max(1e-30);
-        let allowed = 2.0 * (1.0 - (0.25 * delta / radius).min(1.0)).acos();
-        (angle / allowed.max(1e-12))
-            .ceil()
-            .min(options.max_pieces as f64) as u32
-    };
-    let pieces = pieces_for(a, motion_a)
-        .max(pieces_for(b, motion_b))
-        .clamp(1, options.max_pieces.max(1));
-    let stray = chord_deviation(mesh_radius(a), motion_a.angle() / pieces as f64)
-        + chord_deviation(mesh_radius(b), motion_b.angle() / pieces as f64);
-    let tol = PrimitiveTolerances {
-        distance: delta + stray,
-        time: (options.time_tolerance.max(0.0) as f64 * pieces as f64).min(1.0),
-        ..Default::default()
-    };
-    // The node boxes are taken in the frame of a mesh that does not turn: its own boxes are then
-    // the tree's, tight, and only the other mesh's are turned into it.
-    let turns = |m: &RigidMotion| m.start.rotation != m.end.rotation;
-    let (frame, owner) = match (turns(motion_a), turns(motion_b)) {
-        (false, _) => (BoxFrame::Mesh(*motion_a), Some(true)),
-        (true, false) => (BoxFrame::Mesh(*motion_b), Some(false)),
-        (true, true) => (BoxFrame::World, None),
-    };
-    let sa = RigidStep::new(a, *motion_a, pieces, frame, owner == Some(true));
-    let sb = RigidStep::new(b, *motion_b, pieces, frame, owner == Some(false));
-    let hit = first_impact(&sa, &sb, &tol, frame.max_norm_growth(), &mut ws.descent);
-    ws.triangle_pairs = ws.descent.triangle_pairs;
-    Ok(hit)
+    }
 }
 
 /// The first time of impact of two deforming meshes whose vertices move linearly from their
@@ -307,7 +343,7 @@ pub fn deforming_time_of_impact(
 /// A contact at time 0 if the surfaces already cross at the start (feature pairs that cross
 /// do not *come* into contact, so the root finder alone would not see them): at the witness
 /// triangles, with the second triangle's normal turned towards the first.
-fn overlap_at_start(
+pub(crate) fn overlap_at_start(
     a: &CollisionMesh,
     pose_a: &Pose,
     b: &CollisionMesh,

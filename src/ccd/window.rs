@@ -58,6 +58,11 @@ impl MovingBox {
         (self.lo0.lerp(self.lo1, s), self.hi0.lerp(self.hi1, s))
     }
 
+    /// The box's centres at the start and the end of its run.
+    pub fn centres(&self) -> (DVec3, DVec3) {
+        (0.5 * (self.lo0 + self.hi0), 0.5 * (self.lo1 + self.hi1))
+    }
+
     /// The longest side of the box around both ends.
     pub fn largest_side(&self) -> f64 {
         (self.hi0.max(self.hi1) - self.lo0.min(self.lo1)).max_element()

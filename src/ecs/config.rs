@@ -132,6 +132,13 @@ pub struct CollisionConfig {
     /// run to be swept. Default ¼: a ball moving a quarter of its diameter per run cannot
     /// pass through anything at least half its diameter thick between runs.
     pub continuous_motion: f32,
+    /// How a swept pair tested with ADB is tested over its motion: with the time-critical
+    /// continuous query ([`ccd::adb_time_of_impact`](crate::ccd::adb_time_of_impact)) within
+    /// the pair's ADB budget. Conservative (the default): when the budget runs out with node
+    /// pairs left, the pair collides at the earliest time one can meet (no tunnelling is ever
+    /// missed, some contacts are false). Otherwise it collides when the estimate of the pairs
+    /// left reaches [`adb_collide_at`](Self::adb_collide_at).
+    pub continuous_adb_conservative: bool,
     /// How much the Response stage may do per run ([`ResponseBudget`]; unlimited by default).
     /// What is left stays in the [`ContactQueue`](super::ContactQueue) for the next run,
     /// highest priority first.
@@ -159,6 +166,7 @@ impl Default for CollisionConfig {
             contact_regions: false,
             max_self_contacts: 256,
             continuous_motion: 0.25,
+            continuous_adb_conservative: true,
             response_budget: ResponseBudget::Unlimited,
         }
     }

@@ -8,11 +8,12 @@ use smallvec::SmallVec;
 use super::super::budget::{BudgetClock, SliceShare};
 use super::super::config::CollisionConfig;
 use super::super::contact::{
-    bounds_contact, interpenetration_contact, node_contact, region_contact, triangle_pair_contact,
+    ContactPoint, bounds_contact, interpenetration_contact, node_contact, region_contact,
+    triangle_pair_contact,
 };
 use super::super::pairs::{PairTable, Record};
 use super::super::prepare::{ColliderEntry, ColliderTable};
-use super::continuous::swept_contact;
+use super::continuous::{swept_adb_contact, swept_contact};
 use super::memory::exact_from_memory;
 use super::outcome::{Method, PairOutcome};
 use super::plan::Job;
@@ -147,6 +148,22 @@ impl Deadlines {
     }
 }
 
+/// A contact the continuous test found during the motion: the time of impact for a contact
+/// the discrete test found too, else the pair collides with `probability` at that contact.
+fn take_swept(o: &mut PairOutcome, hit: ContactPoint, probability: f64, s: &mut Scratch) {
+    if o.collides {
+        if let Some(c) = o.contacts.first_mut() {
+            c.time_of_impact = hit.time_of_impact;
+        }
+    } else {
+        s.caught += 1;
+        o.collides = true;
+        o.probability = probability;
+        o.contacts.clear();
+        o.contacts.push(hit);
+    }
+}
+
 /// One thread's scratch for the tests of a run: the query settings, the workspaces, and the
 /// most node pairs the next ADB test may visit (what is left of the time for tests).
 struct Scratch<'w> {
@@ -256,7 +273,7 @@ impl Context<'_> {
     }
 
     /// The answer of a job (apart, bounds-only, tested, or past a deadline: from memory for
-    /// an exact pair, kept for the others) and whether it was tested.
+    /// an exact pair, kept for the others but swept ones) and whether it was tested.
     fn answer(&self, job: &Job, late: bool, s: &mut Scratch) -> (Answer, bool) {
         let (ea, eb) = self.ends(job);
         let ends = (ea.entity, eb.entity);
@@ -272,7 +289,9 @@ impl Context<'_> {
             let (o, r) = exact_from_memory(job, memory, slot, (ea, eb), self.run);
             return (Answer::Computed(o, r), false);
         }
-        if late && job.method != Method::Bounds {
+        // A swept pair is tested even past the deadline (with the smallest ADB budget): kept, it
+        // would miss what happened during this run's motion.
+        if late && job.method != Method::Bounds && !job.swept {
             return (Answer::Kept, false);
         }
         let mut o = self.test(job, (ea, eb), s);
@@ -283,9 +302,10 @@ impl Context<'_> {
 
     /// A pair with a collider swept in this run ([`ColliderEntry::is_swept`]), rigid, tested
     /// exactly or with ADB: if its test found it apart, or it did not touch before, the exact
-    /// continuous query over both motions; a contact found during the motion makes it collide
-    /// (probability 1; the contact at the time of impact) or, when the test found a contact
-    /// already, gives that contact its time of impact.
+    /// continuous query over both motions (for an ADB pair the time-critical one within its
+    /// ADB budget, [`sweep_adb`](Self::sweep_adb)); a contact found during the motion makes it
+    /// collide (probability 1; the contact at the time of impact) or, when the test found a
+    /// contact already, gives that contact its time of impact.
     fn sweep(
         &self,
         job: &Job,
@@ -305,19 +325,47 @@ impl Context<'_> {
             return;
         }
         s.swept += 1;
-        let Some(hit) = swept_contact(ea, eb, self.run, s.ccd) else {
+        if o.method == Method::Adb {
+            self.sweep_adb(job, o, (ea, eb), s);
+            return;
+        }
+        if let Some(hit) = swept_contact(ea, eb, self.run, s.ccd) {
+            take_swept(o, hit, 1.0, s);
+        }
+    }
+
+    /// [`sweep`](Self::sweep) for an ADB pair: the time-critical continuous query within the
+    /// pair's ADB budget.
+    fn sweep_adb(
+        &self,
+        job: &Job,
+        o: &mut PairOutcome,
+        (ea, eb): (&ColliderEntry, &ColliderEntry),
+        s: &mut Scratch,
+    ) {
+        let settings = (
+            self.adb_budget(job, s),
+            self.config.adb_collide_at,
+            self.config.continuous_adb_conservative,
+        );
+        let Some(swept) = swept_adb_contact(ea, eb, self.run, settings, s.ccd) else {
             return;
         };
-        if o.collides {
-            if let Some(c) = o.contacts.first_mut() {
-                c.time_of_impact = hit.time_of_impact;
+        o.node_pairs += swept.node_pairs;
+        o.budget_exhausted |= swept.budget_exhausted;
+        if let Some(hit) = swept.contact {
+            take_swept(o, hit, swept.probability, s);
+        }
+    }
+
+    /// The node pairs an ADB test of `job` may visit in this run.
+    fn adb_budget(&self, job: &Job, s: &Scratch) -> Budget {
+        match self.share {
+            None => Budget::Unlimited,
+            Some(share) => {
+                let cap = s.node_cap.max(self.config.min_slice);
+                Budget::NodePairs(share.slice(job.priority).min(cap))
             }
-        } else {
-            s.caught += 1;
-            o.collides = true;
-            o.probability = 1.0;
-            o.contacts.clear();
-            o.contacts.push(hit);
         }
     }
 
@@ -370,13 +418,7 @@ impl Context<'_> {
                     unreachable!("ADB pairs are rigid (planned so)")
                 };
                 s.query.p_min = job.p_min;
-                s.query.budget = match self.share {
-                    None => Budget::Unlimited,
-                    Some(share) => {
-                        let cap = s.node_cap.max(self.config.min_slice);
-                        Budget::NodePairs(share.slice(job.priority).min(cap))
-                    }
-                };
+                s.query.budget = self.adb_budget(job, s);
                 let r = adb_intersects(ta, &ea.pose, tb, &eb.pose, &s.query, s.adb);
                 let mut out = PairOutcome::exact(
                     ends,

@@ -28,6 +28,10 @@ pub(crate) struct Job {
     /// `u32::MAX`: never tested).
     pub stale: u32,
     pub priority: f32,
+    /// Both colliders rigid and one swept in this run
+    /// ([`ContinuousCollision`](super::super::ContinuousCollision)): a test put off to a later
+    /// run would miss what happened during this run's motion, so it is never put off.
+    pub swept: bool,
 }
 
 impl Job {
@@ -45,6 +49,7 @@ impl Job {
             p_min: 1.0,
             stale: 0,
             priority: 0.0,
+            swept: false,
         }
     }
 
@@ -53,9 +58,14 @@ impl Job {
         !self.apart && !self.cached && self.method != Method::Bounds
     }
 
-    /// Needs a test, and is tested only if the budget allows (not an exact pair).
+    /// Needs a test, and is tested only if the budget allows (not an exact pair, not swept).
     pub fn optional(&self) -> bool {
-        self.testable() && self.method != Method::Exact
+        self.testable() && !self.mandatory()
+    }
+
+    /// Tested whatever the budget: an exact pair, or a swept one.
+    pub fn mandatory(&self) -> bool {
+        self.method == Method::Exact || self.swept
     }
 
     /// Handed over to the Tracking stage (tracked pairs, self-collision).
@@ -93,6 +103,7 @@ pub(crate) fn plan_jobs(
             job.apart = true;
             continue;
         }
+        job.swept = ea.rigid && eb.rigid && (ea.swept_run == run || eb.swept_run == run);
         if job.method == Method::Tracking {
             continue;
         }
@@ -116,8 +127,8 @@ pub(crate) fn plan_jobs(
             &eb.aabb,
             eb.motion - ea.motion,
         );
-        if job.method == Method::Exact {
-            // Exact pairs were asked for: tested before the others.
+        if job.mandatory() {
+            // Exact pairs were asked for, swept ones cannot wait: tested before the others.
             priority *= 4.0;
         }
         // New pairs first, and pairs whose boxes just met (collisions start there); a pair
@@ -199,7 +210,7 @@ pub(crate) struct Chosen {
     pub adb_priority: f64,
 }
 
-/// Marks the jobs tested in this run: every testable exact job and, of the optional ones,
+/// Marks the jobs tested in this run: every testable exact or swept job and, of the optional ones,
 /// all of them (`fit` is `None`) or `fit = Some((count, per_bucket))` of them: a quarter of
 /// `count` to the pairs that waited longest for a test (ties in job order), the rest from
 /// the highest priority down (within the last bucket taken, in job order). The quarter for
@@ -213,7 +224,7 @@ pub(crate) fn choose_tests(
 ) -> Chosen {
     let mut chosen = Chosen::default();
     for j in jobs.iter_mut() {
-        j.chosen = j.testable() && (j.method == Method::Exact || fit.is_none());
+        j.chosen = j.testable() && (j.mandatory() || fit.is_none());
     }
     if let Some((count, mut per_bucket)) = fit {
         // The longest waiting first.
@@ -328,6 +339,13 @@ mod tests {
         // Nothing fits: the exact job still.
         choose_tests(&mut jobs, Some((0, plan.optional)), scratch);
         assert_eq!(chosen(&jobs), vec![1]);
+        // A swept ADB job is not optional: chosen too.
+        jobs[0].swept = true;
+        let plan = PlanCounts::count(&jobs);
+        assert_eq!(plan.optional.iter().sum::<u32>(), 3);
+        choose_tests(&mut jobs, Some((0, plan.optional)), scratch);
+        assert_eq!(chosen(&jobs), vec![0, 1]);
+        jobs[0].swept = false;
         // More than there are: all of them.
         choose_tests(&mut jobs, Some((100, plan.optional)), scratch);
         assert_eq!(chosen(&jobs), vec![0, 1, 2, 5, 7]);

@@ -194,6 +194,8 @@ pub(crate) struct BodyPlan {
     pub fidelity: Fidelity,
     pub still_since: u64,
     pub rigid: bool,
+    /// The run in which its world box last covered its motion ([`ColliderEntry::is_swept`]).
+    pub swept_run: u64,
 }
 
 impl BodyPlan {
@@ -204,6 +206,7 @@ impl BodyPlan {
             fidelity: e.fidelity,
             still_since: e.still_since,
             rigid: e.is_rigid(),
+            swept_run: e.swept_run,
         }
     }
 }
