@@ -40,7 +40,7 @@ ccd() { # docs/ccd.md: continuous collision against the discrete query and parry
   ccd_plugin
 }
 
-ccd_plugin() { # docs/ccd.md: continuous collision in the plugin (tunnel, cannonball at 10x)
+ccd_plugin() { # docs/ccd.md: continuous collision in the plugin (tunnel, cannonball at 10x, needle)
   {
     for args in "--speed 10 --svg docs/ccd/tunnel.svg" "--speed 10 --seed 2" "--speed 10 --seed 3" \
       "--speed 3" "--speed 30"; do
@@ -50,6 +50,11 @@ ccd_plugin() { # docs/ccd.md: continuous collision in the plugin (tunnel, cannon
     done
     echo "\$ cargo run --release --example cannonball -- 300 0.5 1000 0.2 off 10"
     cargo run --release --quiet --example cannonball -- 300 0.5 1000 0.2 off 10
+    for args in "--svg docs/ccd/needle.svg" "--seed 2" "--seed 3"; do
+      echo "\$ cargo run --release --example needle -- $args"
+      # shellcheck disable=SC2086
+      cargo run --release --quiet --example needle -- $args
+    done
   } | tee docs/ccd/plugin.txt
 }
 

@@ -1,10 +1,11 @@
-//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`, `tunnel`) and
+//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`, `needle`, `tunnel`) and
 //! `profile`: each scene builds a headless `App` with the plugin in `PostUpdate`.
 #![allow(dead_code)]
 
 pub mod cannonball;
 pub mod cloth;
 pub mod intestine;
+pub mod needle;
 pub mod pile;
 pub mod tunnel;
 
@@ -238,4 +239,14 @@ pub mod tally {
         let t = world.resource::<Tally>();
         (c.started + c.ended + c.contacts).saturating_sub(t.started + t.ended + t.contacts)
     }
+}
+
+/// Writes `svg` to `path`, creating its folder; the error names what failed and where.
+pub fn write_svg(path: &std::path::Path, svg: &str) -> Result<PathBuf, String> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir)
+            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    }
+    std::fs::write(path, svg).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    Ok(path.to_path_buf())
 }

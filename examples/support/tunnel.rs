@@ -572,9 +572,5 @@ fn picture(
         }
     }
     svg += "<text x=\"10\" y=\"20\" font-family=\"sans-serif\" font-size=\"13\">shots that touch the wall: where the discrete test stopped them (red) and continuous collision did (green)</text>\n</svg>\n";
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    }
-    std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(path.to_path_buf())
+    super::write_svg(path, &svg)
 }

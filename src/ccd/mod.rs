@@ -29,7 +29,7 @@ mod primitive;
 mod query;
 mod swept;
 mod time_critical;
-mod window;
+pub(crate) mod window;
 
 pub use primitive::{
     CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,

@@ -70,30 +70,91 @@ impl PrimitiveTolerances {
     }
 }
 
-/// Whether the features stay on one side of the plane through them for all of `window`, farther
-/// than `delta` in the max norm: a cheap proof that they do not meet there. `e1`, `e2` span the
-/// plane (the face's edges, or the two edges' directions) and `d` goes from the plane's point to
-/// the other feature; all move linearly, so `n = e1 × e2` is quadratic in time and `f = n · d`
-/// cubic, and their Bernstein coefficients over the window bound them. Where `|f| / |n|`, the
-/// distance from the plane, exceeds `√3 δ` (a Euclidean distance that large is more than `δ` in
-/// every max-norm sense) for all of the window, the features are apart.
-fn apart_from_plane(e1: [DVec3; 2], e2: [DVec3; 2], d: [DVec3; 2], delta: f64) -> bool {
-    let n = [
-        e1[0].cross(e2[0]),
-        0.5 * (e1[0].cross(e2[1]) + e1[1].cross(e2[0])),
-        e1[1].cross(e2[1]),
-    ];
-    let f = [
-        n[0].dot(d[0]),
-        (2.0 * n[1].dot(d[0]) + n[0].dot(d[1])) / 3.0,
-        (n[2].dot(d[0]) + 2.0 * n[1].dot(d[1])) / 3.0,
-        n[2].dot(d[1]),
-    ];
-    let n_max = n.iter().map(|v| v.length()).fold(0.0, f64::max);
-    let d_max = d[0].length().max(d[1].length());
-    // Rounding of the products, far above f64's error, far below any tolerance used.
-    let bound = 3f64.sqrt() * delta * n_max + 1e-9 * n_max * d_max;
-    f.iter().all(|&x| x > bound) || f.iter().all(|&x| x < -bound)
+/// Where within `window` the features can be within `delta` (max norm) of each other, judged
+/// by their distance from the plane through them: `None` when they stay on one side of it,
+/// farther than that, for all of the window (a cheap proof that they do not meet), else the
+/// part of the window outside of which they do (never narrower than the true part).
+///
+/// `e1`, `e2` span the plane (the face's edges, or the two edges' directions) and `d` goes from
+/// the plane's point to the other feature, each given by a function of time that is linear
+/// over the window; so `n = e1 × e2` is quadratic in time and `f = n · d` cubic, and their
+/// Bernstein coefficients over a window bound them. Where `|f| / |n|`, the distance from the
+/// plane, exceeds `√3 δ` (a Euclidean distance that large is more than `δ` in the max norm),
+/// the features are apart. The curve `f` lies in the convex hull of its control points, so the
+/// times where the hull meets the band `|f| ≤ √3 δ max |n|` hold every time it can be close:
+/// the window is clipped to them (Bézier clipping) and the clip repeated while it narrows the
+/// window by more than a fifth.
+fn plane_window(
+    ends: impl Fn(f64, f64) -> [[DVec3; 2]; 3],
+    delta: f64,
+    window: (f64, f64),
+) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = window;
+    for _ in 0..6 {
+        let [e1, e2, d] = ends(lo, hi);
+        let n = [
+            e1[0].cross(e2[0]),
+            0.5 * (e1[0].cross(e2[1]) + e1[1].cross(e2[0])),
+            e1[1].cross(e2[1]),
+        ];
+        let f = [
+            n[0].dot(d[0]),
+            (2.0 * n[1].dot(d[0]) + n[0].dot(d[1])) / 3.0,
+            (n[2].dot(d[0]) + 2.0 * n[1].dot(d[1])) / 3.0,
+            n[2].dot(d[1]),
+        ];
+        let n_max = n.iter().map(|v| v.length()).fold(0.0, f64::max);
+        let d_max = d[0].length().max(d[1].length());
+        // Rounding of the products, far above f64's error, far below any tolerance used.
+        let band = 3f64.sqrt() * delta * n_max + 1e-9 * n_max * d_max;
+        let (u0, u1) = band_clip(&f, band)?;
+        // Back to the window's time, widened for the rounding of the division.
+        let width = hi - lo;
+        let (new_lo, new_hi) = (
+            (lo + u0 * width - 1e-12).max(lo),
+            (lo + u1 * width + 1e-12).min(hi),
+        );
+        let narrowed = (new_hi - new_lo) < 0.8 * width;
+        (lo, hi) = (new_lo, new_hi);
+        if !narrowed {
+            break;
+        }
+    }
+    Some((lo, hi))
+}
+
+/// The parameters in `[0, 1]` where the convex hull of the control points `(k / 3, f[k])` of a
+/// cubic meets the band `|y| ≤ band`, or `None` where it does not. The hull's edges join pairs
+/// of control points: the extremes of the hull inside the band lie on those segments.
+fn band_clip(f: &[f64; 4], band: f64) -> Option<(f64, f64)> {
+    if f.iter().all(|&y| y > band) || f.iter().all(|&y| y < -band) {
+        return None;
+    }
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..4 {
+        for j in i..4 {
+            let (s0, s1) = (i as f64 / 3.0, j as f64 / 3.0);
+            let (y0, y1) = (f[i], f[j]);
+            // The part of the segment from (s0, y0) to (s1, y1) inside the band.
+            let (mut a, mut b) = (0.0f64, 1.0f64);
+            for (g0, g1) in [(y0 - band, y1 - band), (-band - y0, -band - y1)] {
+                // Keep g(λ) = g0 + λ (g1 − g0) ≤ 0.
+                if g0 > 0.0 && g1 > 0.0 {
+                    a = 1.0;
+                    b = 0.0;
+                } else if g0 > 0.0 {
+                    a = a.max(g0 / (g0 - g1));
+                } else if g1 > 0.0 {
+                    b = b.min(g0 / (g0 - g1));
+                }
+            }
+            if a <= b {
+                lo = lo.min(s0 + a * (s1 - s0));
+                hi = hi.max(s0 + b * (s1 - s0));
+            }
+        }
+    }
+    (lo <= hi).then_some((lo.max(0.0), hi.min(1.0)))
 }
 
 /// Scratch memory of the continuous tests (reuse it: no allocation per test).
@@ -119,13 +180,14 @@ pub fn vertex_face_time(
         (0.0, t_limit.min(1.0)),
     )?;
     let [a, b, c] = *tri;
-    let (w0, w1) = window;
-    let ends = |x: &Trajectory| [x.at(w0), x.at(w1)];
-    let (pa, pb, pc, pp) = (ends(&a), ends(&b), ends(&c), ends(p));
-    let minus = |x: [DVec3; 2], y: [DVec3; 2]| [x[0] - y[0], x[1] - y[1]];
-    if apart_from_plane(minus(pb, pa), minus(pc, pa), minus(pp, pa), tol.distance) {
-        return None;
-    }
+    let window = plane_window(
+        |w0, w1| {
+            let gap = |x: &Trajectory, y: &Trajectory| [x.at(w0) - y.at(w0), x.at(w1) - y.at(w1)];
+            [gap(&b, &a), gap(&c, &a), gap(p, &a)]
+        },
+        tol.distance,
+        window,
+    )?;
     let problem = Problem {
         eval: |t: f64, u: f64, v: f64| {
             let at = a.at(t);
@@ -152,13 +214,14 @@ pub fn edge_edge_time(
         (0.0, t_limit.min(1.0)),
     )?;
     let ([p0, p1], [q0, q1]) = (*p, *q);
-    let (w0, w1) = window;
-    let ends = |x: &Trajectory| [x.at(w0), x.at(w1)];
-    let minus = |x: [DVec3; 2], y: [DVec3; 2]| [x[0] - y[0], x[1] - y[1]];
-    let (a0, a1, b0, b1) = (ends(&p0), ends(&p1), ends(&q0), ends(&q1));
-    if apart_from_plane(minus(a1, a0), minus(b1, b0), minus(b0, a0), tol.distance) {
-        return None;
-    }
+    let window = plane_window(
+        |w0, w1| {
+            let gap = |x: &Trajectory, y: &Trajectory| [x.at(w0) - y.at(w0), x.at(w1) - y.at(w1)];
+            [gap(&p1, &p0), gap(&q1, &q0), gap(&q0, &p0)]
+        },
+        tol.distance,
+        window,
+    )?;
     let problem = Problem {
         eval: |t: f64, u: f64, v: f64| {
             let (pa, qa) = (p0.at(t), q0.at(t));
@@ -219,10 +282,11 @@ mod tests {
     }
 
     #[test]
-    fn the_plane_filter_never_drops_features_that_come_close() {
+    fn the_plane_window_holds_every_time_the_features_come_close() {
         use crate::geometry::{closest_point_on_triangle, closest_points_segment_segment};
-        // Random features moving through a small region: whenever the filter says "apart" over
-        // the step, the features are more than delta apart (max norm) at every sampled time.
+        // Random features moving through a small region: every sampled time at which they are
+        // within delta (max norm) lies in the window the plane test leaves (none when it says
+        // they are apart).
         let mut seed = 99u64;
         let mut next = || {
             seed = seed
@@ -231,7 +295,7 @@ mod tests {
             ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
         };
         let delta = 0.05;
-        let (mut dropped, mut close) = (0, 0);
+        let (mut dropped, mut narrowed, mut close) = (0, 0, 0);
         for _ in 0..4000 {
             let mut path = || {
                 Trajectory::new(
@@ -241,41 +305,59 @@ mod tests {
             };
             let (p, tri) = (path(), [path(), path(), path()]);
             let edges = ([path(), path()], [path(), path()]);
-            let at = |x: &Trajectory| [x.start, x.end];
-            let minus = |x: [DVec3; 2], y: [DVec3; 2]| [x[0] - y[0], x[1] - y[1]];
-            let vf_apart = apart_from_plane(
-                minus(at(&tri[1]), at(&tri[0])),
-                minus(at(&tri[2]), at(&tri[0])),
-                minus(at(&p), at(&tri[0])),
+            let gap = |w0: f64, w1: f64, x: &Trajectory, y: &Trajectory| {
+                [x.at(w0) - y.at(w0), x.at(w1) - y.at(w1)]
+            };
+            let vf_window = plane_window(
+                |w0, w1| {
+                    [
+                        gap(w0, w1, &tri[1], &tri[0]),
+                        gap(w0, w1, &tri[2], &tri[0]),
+                        gap(w0, w1, &p, &tri[0]),
+                    ]
+                },
                 delta,
+                (0.0, 1.0),
             );
             let (e, f) = edges;
-            let ee_apart = apart_from_plane(
-                minus(at(&e[1]), at(&e[0])),
-                minus(at(&f[1]), at(&f[0])),
-                minus(at(&f[0]), at(&e[0])),
+            let ee_window = plane_window(
+                |w0, w1| {
+                    [
+                        gap(w0, w1, &e[1], &e[0]),
+                        gap(w0, w1, &f[1], &f[0]),
+                        gap(w0, w1, &f[0], &e[0]),
+                    ]
+                },
                 delta,
+                (0.0, 1.0),
             );
-            for k in 0..=200 {
-                let t = k as f64 / 200.0;
+            for k in 0..=400 {
+                let t = k as f64 / 400.0;
                 let q = tri.map(|v| v.at(t));
                 let vf = (p.at(t) - closest_point_on_triangle(p.at(t), &q)).abs();
                 let c =
                     closest_points_segment_segment(e[0].at(t), e[1].at(t), f[0].at(t), f[1].at(t));
                 let ee = (c.point_a - c.point_b).abs();
-                for (apart, gap) in [(vf_apart, vf), (ee_apart, ee)] {
+                for (window, gap) in [(vf_window, vf), (ee_window, ee)] {
                     if gap.max_element() <= delta {
                         close += 1;
-                        assert!(!apart, "dropped features {gap:?} apart at {t}");
+                        let (lo, hi) = window.expect("not dropped");
+                        assert!(lo <= t && t <= hi, "{t} outside [{lo}, {hi}], gap {gap:?}");
                     }
                 }
             }
-            dropped += vf_apart as usize + ee_apart as usize;
+            for w in [vf_window, ee_window] {
+                match w {
+                    None => dropped += 1,
+                    Some((lo, hi)) => narrowed += usize::from(hi - lo < 0.5),
+                }
+            }
         }
-        // The filter does drop pairs, and pairs do come close: the test can fail both ways.
+        // The filter drops pairs and narrows windows, and pairs do come close: the test can
+        // fail both ways.
         assert!(
-            dropped > 300 && close > 1000,
-            "{dropped} dropped, {close} close"
+            dropped > 300 && narrowed > 1000 && close > 1000,
+            "{dropped} dropped, {narrowed} narrowed, {close} close"
         );
     }
 

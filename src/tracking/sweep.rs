@@ -15,6 +15,7 @@ use glam::DVec3;
 use super::contact::Contact;
 use super::feature::Feature;
 use super::surface::TrackedSurface;
+use crate::ccd::window::{MovingBox, overlap_window};
 use crate::ccd::{CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time};
 use crate::geometry::{PoseF64, closest_points_triangle_triangle};
 
@@ -73,6 +74,11 @@ impl SweptSide<'_> {
     /// How far vertex `v` moves over the step (in the first mesh's frame).
     fn reach(&self, v: u32) -> f64 {
         (self.end(v) - self.start(v)).length()
+    }
+
+    /// The box around triangle `t` at each time of the step (its corners move linearly).
+    fn moving_box(&self, t: u32) -> MovingBox {
+        MovingBox::around(&self.corners(t).map(|v| self.trajectory(v)))
     }
 
     /// The box swept by triangle `t`, grown by `margin`.
@@ -235,10 +241,11 @@ impl<E: Fn(u32, u32) -> bool> Sweep<'_, E> {
         if !s.tested.insert(key) {
             return None;
         }
-        let margin = tol.distance;
-        if !boxes_meet(&self.a.swept_box(x, margin), &self.b.swept_box(y, 0.0)) {
-            return None;
-        }
+        // Apart unless the triangles' boxes meet at some time of the step (not only their
+        // boxes over the whole step: a fast body sweeps a long box over many triangles it
+        // passes only one at a time).
+        let (ma, mb) = (self.a.moving_box(x), self.b.moving_box(y));
+        overlap_window(&ma, &mb, tol.distance, (0.0, 1.0))?;
         counts.triangle_pairs += 1;
         let (time, touching) = self.triangle_pair_time(x, y, tol, &mut s.ccd)?;
         (time > 0.0).then_some(Crossing {

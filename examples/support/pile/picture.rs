@@ -93,13 +93,9 @@ pub fn side_view(world: &mut World, path: &Path) -> Result<Picture, String> {
     let mut svg = String::new();
     draw(&mut svg, &bodies, &pieces, &contacts, &names)
         .map_err(|e| format!("cannot draw {}: {e}", path.display()))?;
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir)
-            .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
-    }
-    std::fs::write(path, svg).map_err(|e| format!("cannot write {}: {e}", path.display()))?;
+    let path = super::super::write_svg(path, &svg)?;
     Ok(Picture {
-        path: path.to_path_buf(),
+        path,
         bodies: bodies.len(),
         box_pieces: pieces.len(),
         contacts: contacts.len(),
