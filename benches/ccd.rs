@@ -7,13 +7,16 @@
 //! `cargo bench --bench ccd` prints, per mesh, the per-query medians, the ratios, how often
 //! our time of impact and parry's agree within 1e-3 of the step, and how each compares with a
 //! reference (the discrete exact query on 400 sub-steps, refined by bisection): `=` within
-//! 1e-3 of it, `<` earlier, `>` later or missed, `+` a contact the reference does not see.
+//! 1e-3 of it, `<` earlier, `>` later or missed, `+` a contact the reference does not see;
+//! then the same for the turning motions (parry's nonlinear cast on the first
+//! `NONLINEAR_POSES` of them only, once each: it takes up to seconds per query; its time is
+//! the median of those).
 use std::hint::black_box;
 use std::time::Instant;
 
 use glam::{Quat, Vec3};
 use parry3d::math::Pose as ParryPose;
-use parry3d::query::{ShapeCastOptions, cast_shapes};
+use parry3d::query::{NonlinearRigidMotion, ShapeCastOptions, cast_shapes, cast_shapes_nonlinear};
 use parry3d::shape::TriMesh as ParryMesh;
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::ccd::{CcdOptions, CcdWorkspace, RigidMotion, time_of_impact};
@@ -23,12 +26,20 @@ mod support;
 
 const POSES: usize = 16;
 const REPEATS: usize = 3;
+/// parry3d's nonlinear cast takes up to seconds per query on these meshes: it runs on the first
+/// few turning approaches only, once each.
+const NONLINEAR_POSES: usize = 4;
 
 /// The median over poses of the fastest of `REPEATS` runs of `f` per pose (seconds).
-fn median_time(n: usize, mut f: impl FnMut(usize)) -> f64 {
+fn median_time(n: usize, f: impl FnMut(usize)) -> f64 {
+    median_time_of(n, REPEATS, f)
+}
+
+/// The median over poses of the fastest of `repeats` runs of `f` per pose (seconds).
+fn median_time_of(n: usize, repeats: usize, mut f: impl FnMut(usize)) -> f64 {
     let mut times: Vec<f64> = (0..n)
         .map(|k| {
-            (0..REPEATS)
+            (0..repeats)
                 .map(|_| {
                     let start = Instant::now();
                     f(k);
@@ -43,7 +54,7 @@ fn median_time(n: usize, mut f: impl FnMut(usize)) -> f64 {
 
 fn main() {
     println!(
-        "{:<22} {:>8} {:>11} {:>11} {:>11} {:>11} {:>9} {:>9} {:>10} {:>12} {:>12}",
+        "{:<22} {:>8} {:>11} {:>11} {:>11} {:>11} {:>9} {:>9} {:>10} {:>12} {:>12} {:>12} {:>9} {:>12} {:>12}",
         "mesh",
         "tris",
         "discrete",
@@ -54,7 +65,11 @@ fn main() {
         "lin/parry",
         "agree",
         "ours =/</>/+",
-        "parry =/</>/+"
+        "parry =/</>/+",
+        "parry rot.",
+        "rot/parry",
+        "ours rot",
+        "parry rot"
     );
     for (name, mesh) in support::bench_meshes() {
         let ours = CollisionMesh::new(mesh.clone());
@@ -100,11 +115,36 @@ fn main() {
                 .expect("finite poses");
             ours_times[k] = hit.map(|h| h.time);
         });
+        let mut ours_rot_times = vec![None; POSES];
         let rot = median_time(POSES, |k| {
+            let hit = time_of_impact(&ours, &still, &ours, &turning[k], &options, &mut ccd_ws)
+                .expect("finite poses");
+            ours_rot_times[k] = hit.map(|h| h.time);
+        });
+        // Ours on the approaches parry's nonlinear cast is timed on, for the ratio.
+        let rot_few = median_time(NONLINEAR_POSES, |k| {
             black_box(
                 time_of_impact(&ours, &still, &ours, &turning[k], &options, &mut ccd_ws)
                     .expect("finite poses"),
             );
+        });
+        // parry's nonlinear cast of the same turning motion: rotation at a constant rate about
+        // the mesh's origin (its local centre), by 0.3 rad about the turned Y axis.
+        let mut parry_rot_times = vec![None; NONLINEAR_POSES];
+        // One run per pose, on the first few: each takes up to seconds.
+        let parry_rot = median_time_of(NONLINEAR_POSES, 1, |k| {
+            let m = &turning[k];
+            let moving = NonlinearRigidMotion::new(
+                ParryPose::from_parts(m.start.translation, m.start.rotation),
+                Vec3::ZERO,
+                m.end.translation - m.start.translation,
+                m.start.rotation * Vec3::Y * 0.3,
+            );
+            let fixed =
+                NonlinearRigidMotion::new(ParryPose::IDENTITY, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO);
+            let hit = cast_shapes_nonlinear(&fixed, &parry, &moving, &parry, 0.0, 1.0, true)
+                .expect("supported shapes");
+            parry_rot_times[k] = hit.map(|h| h.time_of_impact);
         });
         let mut parry_times = vec![None; POSES];
         let cast_options = ShapeCastOptions {
@@ -130,27 +170,32 @@ fn main() {
         });
         // The reference: the discrete exact query on 400 sub-steps, the first hit refined by
         // bisection; an answer is right when within 1e-3 of it (or both find none).
-        let reference: Vec<Option<f32>> = linear
-            .iter()
-            .map(|m| {
-                let mut hit = |t: f32| intersects(&ours, &Pose::IDENTITY, &ours, &m.at(t), &mut ws);
-                let first = (0..=400).find(|&k| hit(k as f32 / 400.0))?;
-                if first == 0 {
-                    return Some(0.0);
-                }
-                let (mut lo, mut hi) = ((first - 1) as f32 / 400.0, first as f32 / 400.0);
-                while hi - lo > 1e-6 {
-                    let mid = 0.5 * (lo + hi);
-                    if hit(mid) { hi = mid } else { lo = mid }
-                }
-                Some(hi)
-            })
-            .collect();
+        let reference_of = |motions: &[RigidMotion], ws: &mut QueryWorkspace| -> Vec<Option<f32>> {
+            motions
+                .iter()
+                .map(|m| {
+                    let mut hit =
+                        |t: f32| intersects(&ours, &Pose::IDENTITY, &ours, &m.at(t), &mut *ws);
+                    let first = (0..=400).find(|&k| hit(k as f32 / 400.0))?;
+                    if first == 0 {
+                        return Some(0.0);
+                    }
+                    let (mut lo, mut hi) = ((first - 1) as f32 / 400.0, first as f32 / 400.0);
+                    while hi - lo > 1e-6 {
+                        let mid = 0.5 * (lo + hi);
+                        if hit(mid) { hi = mid } else { lo = mid }
+                    }
+                    Some(hi)
+                })
+                .collect()
+        };
+        let reference = reference_of(&linear, &mut ws);
+        let turning_reference = reference_of(&turning, &mut ws);
         // Against the reference: within 1e-3 (or both none), earlier, later or missed, or a
         // contact where the reference has none.
-        let judge = |times: &[Option<f32>]| {
+        let judge = |times: &[Option<f32>], reference: &[Option<f32>]| {
             let mut v = [0usize; 4];
-            for (a, r) in times.iter().zip(&reference) {
+            for (a, r) in times.iter().zip(reference) {
                 let class = match (a, r) {
                     (None, None) => 0,
                     (Some(a), Some(r)) if (a - r).abs() <= 1e-3 => 0,
@@ -162,7 +207,14 @@ fn main() {
             }
             format!("{}/{}/{}/{}", v[0], v[1], v[2], v[3])
         };
-        let (ours_right, parry_right) = (judge(&ours_times), judge(&parry_times));
+        let (ours_right, parry_right) = (
+            judge(&ours_times, &reference),
+            judge(&parry_times, &reference),
+        );
+        let (ours_rot_right, parry_rot_right) = (
+            judge(&ours_rot_times, &turning_reference),
+            judge(&parry_rot_times, &turning_reference[..NONLINEAR_POSES]),
+        );
         let agree = ours_times
             .iter()
             .zip(&parry_times)
@@ -174,7 +226,7 @@ fn main() {
             .count();
         let us = |s: f64| format!("{:.1} µs", s * 1e6);
         println!(
-            "{:<22} {:>8} {:>11} {:>11} {:>11} {:>11} {:>8.2}x {:>8.2}x {:>7}/{} {:>12} {:>12}",
+            "{:<22} {:>8} {:>11} {:>11} {:>11} {:>11} {:>8.2}x {:>8.2}x {:>7}/{} {:>12} {:>12} {:>12} {:>8.2}x {:>12} {:>12}",
             name,
             mesh.triangle_count(),
             us(discrete),
@@ -186,7 +238,11 @@ fn main() {
             agree,
             POSES,
             ours_right,
-            parry_right
+            parry_right,
+            us(parry_rot),
+            rot_few / parry_rot,
+            ours_rot_right,
+            parry_rot_right
         );
     }
 }

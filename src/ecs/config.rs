@@ -16,9 +16,11 @@ pub enum FrameBudget {
     Unlimited,
     /// A wall-clock budget for the collision stages (Prepare to Report), planned by the
     /// [`BudgetController`](super::BudgetController) from measured costs: the narrow phase
-    /// tests the exact pairs and then, in what is left (aiming a little below the budget when
-    /// runs overran), the pairs that waited longest (a quarter of the tests) and the most
-    /// urgent others, sharing node pairs among the tested ADB pairs by priority. The others
+    /// tests the exact pairs and the pairs with a collider swept in the run
+    /// ([`ContinuousCollision`](super::ContinuousCollision): put off, their test would miss
+    /// the motion; past the deadline an ADB one gets the smallest budget) and then, in what is
+    /// left (aiming a little below the budget when runs overran), the pairs that waited
+    /// longest (a quarter of the tests) and the most urgent others, sharing node pairs among the tested ADB pairs by priority. The others
     /// keep their last answer, one run older
     /// ([`PairView::age`](super::PairView::age); an exact pair past its deadline gets one
     /// from memory, [`Method::Coherence`](super::Method::Coherence)), and wait for a test.
