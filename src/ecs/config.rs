@@ -20,8 +20,8 @@ pub enum FrameBudget {
     /// ([`ContinuousCollision`](super::ContinuousCollision): put off, their test would miss
     /// the motion; past the deadline an ADB one gets the smallest budget) and then, in what is
     /// left (aiming a little below the budget when runs overran), the pairs that waited
-    /// longest (a quarter of the tests) and the most urgent others, sharing node pairs among the tested ADB pairs by priority. The others
-    /// keep their last answer, one run older
+    /// longest (a quarter of the tests) and the most urgent others, sharing node pairs among
+    /// the tested ADB pairs by priority. The others keep their last answer, one run older
     /// ([`PairView::age`](super::PairView::age); an exact pair past its deadline gets one
     /// from memory, [`Method::Coherence`](super::Method::Coherence)), and wait for a test.
     /// The Tracking stages (tracked pairs, self-collision) share the budget: past the run's
