@@ -1,5 +1,6 @@
-//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`, `needle`, `tunnel`) and
-//! `profile`: each scene builds a headless `App` with the plugin in `PostUpdate`.
+//! Scene code shared by the example worlds (`pile`, `cannonball`, `cloth`, `intestine`,
+//! `needle`, `tunnel`) and `profile`: each scene builds a headless `App` with the plugin in
+//! `PostUpdate`.
 #![allow(dead_code)]
 
 pub mod cannonball;

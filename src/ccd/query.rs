@@ -3,7 +3,7 @@ use glam::{DVec3, Vec3};
 
 use super::descent::{DescentScratch, first_impact};
 use super::primitive::PrimitiveTolerances;
-use super::swept::{BoxFrame, DeformingStep, RigidStep, chord_deviation, mesh_radius};
+use super::swept::{BoxFrame, DeformingStep, PoseCache, RigidStep, chord_deviation, mesh_radius};
 use crate::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, TrianglePair, intersects_with};
 use crate::geometry::{Pose, closest_points_triangle_triangle};
 
@@ -153,6 +153,8 @@ pub enum CcdError {
 pub struct CcdWorkspace {
     pub(crate) exact: QueryWorkspace,
     pub(crate) descent: DescentScratch,
+    /// The two meshes' poses at the step's piece boundaries.
+    pub(crate) poses: (PoseCache, PoseCache),
     /// Triangle pairs tested by the last query (those whose boxes meet within the step).
     pub triangle_pairs: u64,
 }
@@ -213,7 +215,7 @@ pub fn time_of_impact(
     if let Some(hit) = overlap_at_start(a, &motion_a.start, b, &motion_b.start, ws) {
         return Ok(Some(hit));
     }
-    let step = RigidPair::new((a, motion_a), (b, motion_b), options);
+    let step = RigidPair::new((a, motion_a), (b, motion_b), options, &mut ws.poses);
     let hit = first_impact(&step.a, &step.b, &step.tol, step.growth, &mut ws.descent);
     ws.triangle_pairs = ws.descent.triangle_pairs;
     Ok(hit)
@@ -251,6 +253,7 @@ impl<'a> RigidPair<'a> {
         (a, motion_a): (&'a CollisionMesh, &RigidMotion),
         (b, motion_b): (&'a CollisionMesh, &RigidMotion),
         options: &CcdOptions,
+        poses: &'a mut (PoseCache, PoseCache),
     ) -> Self {
         let delta = options.distance_tolerance.max(0.0) as f64;
         let pieces_for = |mesh: &CollisionMesh, m: &RigidMotion| {
@@ -283,9 +286,12 @@ impl<'a> RigidPair<'a> {
             (true, false) => (BoxFrame::Mesh(*motion_b), Some(false)),
             (true, true) => (BoxFrame::World, None),
         };
+        poses.0.reset(pieces);
+        poses.1.reset(pieces);
+        let (poses_a, poses_b): (&'a PoseCache, &'a PoseCache) = (&poses.0, &poses.1);
         Self {
-            a: RigidStep::new(a, *motion_a, pieces, frame, owner == Some(true)),
-            b: RigidStep::new(b, *motion_b, pieces, frame, owner == Some(false)),
+            a: RigidStep::new(a, *motion_a, (pieces, poses_a), frame, owner == Some(true)),
+            b: RigidStep::new(b, *motion_b, (pieces, poses_b), frame, owner == Some(false)),
             tol,
             growth: frame.max_norm_growth(),
             pieces,

@@ -70,23 +70,41 @@ pub(crate) struct RigidStep<'a> {
     radius: f64,
     /// The angle turned over the whole step.
     angle: f64,
-    /// Per piece boundary `k`: the mesh's pose in the frame (for its boxes) and in the world
-    /// (for its vertices), worked out when first read.
+    /// Per piece boundary: the mesh's poses, worked out when first read.
+    poses: &'a PoseCache,
+}
+
+/// Per piece boundary `k` of a step: a mesh's pose in the step's frame (for its boxes) and in
+/// the world (for its vertices), each worked out when first read. Kept in the workspace, so a
+/// query allocates nothing once it has grown.
+#[derive(Debug, Default, Clone)]
+pub(crate) struct PoseCache {
     in_frame: Vec<OnceCell<BoxTransform>>,
     in_world: Vec<OnceCell<PoseF64>>,
 }
 
+impl PoseCache {
+    /// Empties the cache for a step of `pieces` pieces.
+    pub fn reset(&mut self, pieces: u32) {
+        let boundaries = pieces as usize + 1;
+        self.in_frame.clear();
+        self.in_frame.resize_with(boundaries, OnceCell::new);
+        self.in_world.clear();
+        self.in_world.resize_with(boundaries, OnceCell::new);
+    }
+}
+
 impl<'a> RigidStep<'a> {
     /// `mesh` moving by `motion`, cut into `pieces`, its boxes in `frame` (`own`: the frame is
-    /// this mesh's).
+    /// this mesh's); `poses` was [reset](PoseCache::reset) for `pieces`.
     pub fn new(
         mesh: &'a CollisionMesh,
         motion: RigidMotion,
-        pieces: u32,
+        (pieces, poses): (u32, &'a PoseCache),
         frame: BoxFrame,
         own: bool,
     ) -> Self {
-        let boundaries = pieces as usize + 1;
+        debug_assert_eq!(poses.in_world.len(), pieces as usize + 1);
         Self {
             mesh,
             motion,
@@ -95,8 +113,7 @@ impl<'a> RigidStep<'a> {
             pieces,
             radius: mesh_radius(mesh),
             angle: motion.angle(),
-            in_frame: (0..boundaries).map(|_| OnceCell::new()).collect(),
-            in_world: (0..boundaries).map(|_| OnceCell::new()).collect(),
+            poses,
         }
     }
 
@@ -106,11 +123,12 @@ impl<'a> RigidStep<'a> {
     }
 
     fn world_pose(&self, k: u32) -> &PoseF64 {
-        self.in_world[k as usize].get_or_init(|| self.motion.at(self.boundary_time(k)).to_f64())
+        self.poses.in_world[k as usize]
+            .get_or_init(|| self.motion.at(self.boundary_time(k)).to_f64())
     }
 
     fn frame_transform(&self, k: u32) -> &BoxTransform {
-        self.in_frame[k as usize].get_or_init(|| {
+        self.poses.in_frame[k as usize].get_or_init(|| {
             let pose = *self.world_pose(k);
             match self.frame {
                 BoxFrame::World => BoxTransform::new(pose.rotation, pose.translation),
@@ -180,6 +198,7 @@ impl SweptMesh for RigidStep<'_> {
 
 /// [`Pose::transform_aabb`](crate::geometry::Pose::transform_aabb) for a pose worked out in
 /// `f64`, its matrices computed once.
+#[derive(Debug, Clone, Copy)]
 struct BoxTransform {
     rotation: Mat3,
     abs: Mat3,
@@ -288,7 +307,9 @@ mod tests {
                         * Quat::from_rotation_x(0.4),
                 ),
             );
-            let step = RigidStep::new(&mesh, motion, pieces, BoxFrame::World, false);
+            let mut poses = PoseCache::default();
+            poses.reset(pieces);
+            let step = RigidStep::new(&mesh, motion, (pieces, &poses), BoxFrame::World, false);
             let nodes = mesh.bvh().nodes();
             for span in [(0, pieces), (1, pieces / 2 + 1), (pieces / 3, pieces)] {
                 for (i, node) in nodes.iter().enumerate().filter(|(_, n)| n.is_leaf()) {

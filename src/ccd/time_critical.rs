@@ -192,7 +192,12 @@ pub fn adb_time_of_impact(
             ..out
         });
     }
-    let step = RigidPair::new((ma, motion_a), (mb, motion_b), &query.options);
+    let step = RigidPair::new(
+        (ma, motion_a),
+        (mb, motion_b),
+        &query.options,
+        &mut ws.poses,
+    );
     let mut limit = match query.budget {
         Budget::Unlimited => SearchLimit::default(),
         Budget::NodePairs(n) => SearchLimit {
