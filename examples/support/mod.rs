@@ -182,14 +182,7 @@ pub fn shared_mesh(file: &str) -> Option<TriMesh> {
     TriMesh::from_obj(dir.join(file)).ok()
 }
 
-/// `mesh` moved to its box centre and scaled so that its largest extent is `size`.
-pub fn normalized(mesh: &TriMesh, size: f32) -> TriMesh {
-    let b = mesh.aabb();
-    let s = size / b.extents().max_element().max(1e-6);
-    mesh.translated(-b.center())
-        .and_then(|m| m.scaled(Vec3::splat(s)))
-        .expect("moving and scaling keep a valid mesh")
-}
+pub use pile::layout::normalized;
 
 pub mod tally {
     //! Counting the events a game would read: a reader that runs only every other frame (and

@@ -1,6 +1,7 @@
 //! Pile: rigid meshes (generated, and shared ones when present) falling into a box, with the
 //! built-in impulse response; the `pile` example's command line and run ([`Args`], [`run`]),
 //! and its picture of the final scene ([`picture`]).
+pub mod layout;
 pub mod picture;
 
 use std::fmt;
@@ -9,12 +10,11 @@ use std::time::Instant;
 
 use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
-use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
 use stochastic_collision::ecs::{ImpulseSettings, Rest};
 use stochastic_collision::prelude::*;
 
 use super::{Options, Scene, normalized, shared_mesh};
+use layout::pile_layout;
 
 /// Default number of bodies.
 pub const DEFAULT_BODIES: usize = 1000;
@@ -63,73 +63,30 @@ pub fn setup(app: &mut App, options: &Options) {
             ..Default::default()
         }),
     );
-    let n = options.count(DEFAULT_BODIES);
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(options.seed);
-    // A box whose floor holds about a quarter of the bodies per layer.
-    let per_row = ((n as f32 / 4.0).sqrt().ceil() as usize).max(2);
-    let spacing = 0.6;
-    // Layers fall from a little apart, so that they land one after the other.
-    let layer_gap = 1.2;
-    let half = per_row as f32 * spacing * 0.5 + 0.3;
+    let layout = pile_layout(options.count(DEFAULT_BODIES), options.seed);
     let world = app.world_mut();
-    world.insert_resource(PileBox { half });
+    world.insert_resource(PileBox { half: layout.half });
     // Subdivided, so that its tree has small leaves (a few huge triangles make every exact
-    // test against it slow).
-    let slab = |h: Vec3| MeshCollider::new(generate::cuboid(h, 12));
-    let height = 1.5;
-    // The box is static level geometry of a few large triangles: tested exactly (cheap, and
+    // test against it slow). The box is static level geometry: tested exactly (cheap, and
     // nothing may fall through it); the bodies among themselves use the default fidelity.
-    let exact = Fidelity::Exact;
-    let floor = Vec3::new(half + 0.5, 0.5, half + 0.5);
-    world.spawn((slab(floor), pose(0.0, -0.5, 0.0), exact));
-    for (x, z, h) in [
-        (half + 0.25, 0.0, Vec3::new(0.25, height, half + 0.5)),
-        (-half - 0.25, 0.0, Vec3::new(0.25, height, half + 0.5)),
-        (0.0, half + 0.25, Vec3::new(half + 0.5, height, 0.25)),
-        (0.0, -half - 0.25, Vec3::new(half + 0.5, height, 0.25)),
-    ] {
-        world.spawn((slab(h), pose(x, height, z), exact));
+    for (h, at) in &layout.slabs {
+        world.spawn((
+            MeshCollider::new(generate::cuboid(*h, 12)),
+            ColliderPose::from_translation(*at),
+            Fidelity::Exact,
+        ));
     }
     let kinds = body_kinds();
     let colliders: Vec<MeshCollider> = kinds.iter().map(|(_, c)| c.clone()).collect();
     world.insert_resource(BodyKinds(kinds));
-    for i in 0..n {
-        let (layer, k) = (i / (per_row * per_row), i % (per_row * per_row));
-        let (row, col) = (k / per_row, k % per_row);
-        let jitter = Vec3::new(
-            rng.random_range(-0.05..0.05),
-            0.0,
-            rng.random_range(-0.05..0.05),
-        );
-        let position = Vec3::new(
-            (col as f32 + 0.5) * spacing - half + 0.3,
-            0.6 + layer as f32 * layer_gap,
-            (row as f32 + 0.5) * spacing - half + 0.3,
-        ) + jitter;
-        let axis = Vec3::new(
-            rng.random_range(-1.0..1.0),
-            1.0,
-            rng.random_range(-1.0..1.0),
-        );
-        let rotation = Quat::from_axis_angle(
-            axis.normalize(),
-            rng.random_range(0.0..std::f32::consts::TAU),
-        );
+    for (i, body) in layout.bodies.iter().enumerate() {
         world.spawn((
             colliders[i % colliders.len()].clone(),
-            ColliderPose(Pose::new(position, rotation)),
-            BodyVelocity(Vec3::new(
-                rng.random_range(-0.5..0.5),
-                0.0,
-                rng.random_range(-0.5..0.5),
-            )),
+            ColliderPose(Pose::new(body.position, body.rotation)),
+            BodyVelocity(body.velocity),
             BodyMass(1.0),
         ));
     }
-}
-
-fn pose(x: f32, y: f32, z: f32) -> ColliderPose {
-    ColliderPose::from_translation(Vec3::new(x, y, z))
 }
 
 /// Bodies with a velocity still above `speed` (how settled the pile is).

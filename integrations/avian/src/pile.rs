@@ -23,8 +23,10 @@ use bevy::app::{TaskPoolOptions, TaskPoolPlugin};
 use bevy::ecs::system::RunSystemOnce;
 use bevy::prelude::*;
 use bevy::time::TimeUpdateStrategy;
-use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
+#[path = "../../../examples/support/pile/layout.rs"]
+mod layout;
+
+use layout::{normalized, pile_layout};
 use stochastic_collision::ecs::{ImpulseSettings, Rest, Stage};
 use stochastic_collision::prelude::{
     BodyInertia, BodyMass, BodyVelocity, ColliderPose, CollisionConfig, CollisionDiagnostics,
@@ -110,19 +112,10 @@ pub fn shared_mesh_dir() -> PathBuf {
     )
 }
 
-/// `mesh` moved to its box centre and scaled so that its largest extent is `size` (the main
-/// crate's `examples/support/mod.rs` `normalized`).
-pub fn normalized(mesh: &TriMesh, size: f32) -> TriMesh {
-    let b = mesh.aabb();
-    let s = size / b.extents().max_element().max(1e-6);
-    mesh.translated(-b.center())
-        .and_then(|m| m.scaled(Vec3::splat(s)))
-        .expect("moving and scaling keep a valid mesh")
-}
-
 impl PileScene {
-    /// The scene of `bodies` bodies spawned from `seed`: the main crate's `pile::setup` call
-    /// for call (the same random draws in the same order). With `suzanne`, the shared Suzanne
+    /// The scene of `bodies` bodies spawned from `seed`: the main crate's pile layout
+    /// (`examples/support/pile/layout.rs`, included by path: the same random draws in the
+    /// same order). With `suzanne`, the shared Suzanne
     /// mesh is a fourth kind of body when found (as in the main crate); without, it is not
     /// looked for.
     pub fn new(bodies: usize, seed: u64, suzanne: bool) -> PileScene {
@@ -143,61 +136,25 @@ impl PileScene {
         } else {
             Suzanne::LeftOut
         };
-        let n = bodies;
-        let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
-        let per_row = ((n as f32 / 4.0).sqrt().ceil() as usize).max(2);
-        let spacing = 0.6;
-        let layer_gap = 1.2;
-        let half = per_row as f32 * spacing * 0.5 + 0.3;
-        let height = 1.5;
-        let slab = |h: Vec3| generate::cuboid(h, 12);
-        let mut walls = vec![(
-            slab(Vec3::new(half + 0.5, 0.5, half + 0.5)),
-            Vec3::new(0.0, -0.5, 0.0),
-        )];
-        for (x, z, h) in [
-            (half + 0.25, 0.0, Vec3::new(0.25, height, half + 0.5)),
-            (-half - 0.25, 0.0, Vec3::new(0.25, height, half + 0.5)),
-            (0.0, half + 0.25, Vec3::new(half + 0.5, height, 0.25)),
-            (0.0, -half - 0.25, Vec3::new(half + 0.5, height, 0.25)),
-        ] {
-            walls.push((slab(h), Vec3::new(x, height, z)));
-        }
-        let mut spawns = Vec::with_capacity(n);
-        for i in 0..n {
-            let (layer, k) = (i / (per_row * per_row), i % (per_row * per_row));
-            let (row, col) = (k / per_row, k % per_row);
-            let jitter = Vec3::new(
-                rng.random_range(-0.05..0.05),
-                0.0,
-                rng.random_range(-0.05..0.05),
-            );
-            let position = Vec3::new(
-                (col as f32 + 0.5) * spacing - half + 0.3,
-                0.6 + layer as f32 * layer_gap,
-                (row as f32 + 0.5) * spacing - half + 0.3,
-            ) + jitter;
-            let axis = Vec3::new(
-                rng.random_range(-1.0..1.0),
-                1.0,
-                rng.random_range(-1.0..1.0),
-            );
-            let rotation = Quat::from_axis_angle(
-                axis.normalize(),
-                rng.random_range(0.0..std::f32::consts::TAU),
-            );
-            let velocity = Vec3::new(
-                rng.random_range(-0.5..0.5),
-                0.0,
-                rng.random_range(-0.5..0.5),
-            );
-            spawns.push(BodySpawn {
+        // The main crate's layout: the same slabs and starts from the same draws.
+        let layout = pile_layout(bodies, seed);
+        let walls = layout
+            .slabs
+            .iter()
+            .map(|(h, at)| (generate::cuboid(*h, 12), *at))
+            .collect();
+        let spawns = layout
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(i, b)| BodySpawn {
                 kind: i % kinds.len(),
-                position,
-                rotation,
-                velocity,
-            });
-        }
+                position: b.position,
+                rotation: b.rotation,
+                velocity: b.velocity,
+            })
+            .collect();
+        let half = layout.half;
         PileScene {
             seed,
             kinds,
