@@ -1,5 +1,7 @@
 //! Exact mesh–mesh `intersects` on near-contact poses, side by side with parry3d's
 //! `intersection_test` on the same meshes and poses, and BVH build against parry's TriMesh build.
+//! The table also times the crate's best exact query (`adb::exact_intersects` on ADB-trees) and
+//! counts, pose by pose, where either of ours answers differently from parry3d.
 //!
 //! `cargo bench --bench exact_vs_parry` runs the criterion groups, then prints a table of
 //! per-query medians and the ratio ours / parry (`docs/performance.md` quotes it).
@@ -10,6 +12,7 @@ use criterion::{Criterion, criterion_group};
 use parry3d::math::Pose as ParryPose;
 use parry3d::query::intersection_test;
 use parry3d::shape::TriMesh as ParryMesh;
+use stochastic_collision::adb::{AdbTree, AdbWorkspace, exact_intersects};
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::TriMesh;
@@ -22,6 +25,8 @@ struct Case {
     name: String,
     triangles: usize,
     ours: CollisionMesh,
+    /// The same mesh's ADB-tree, for the best exact query.
+    adb: AdbTree,
     parry: ParryMesh,
     poses: Vec<Pose>,
 }
@@ -47,6 +52,7 @@ fn cases() -> Vec<Case> {
                 name,
                 triangles: mesh.triangle_count(),
                 parry: parry_mesh(&mesh),
+                adb: AdbTree::new(ours.clone()),
                 ours,
                 poses,
             }
@@ -145,15 +151,13 @@ fn print_table(cases: &[Case]) {
         "\n## exact intersects vs parry3d {POSES} near-contact poses per mesh (offsets within ±2% of size)\n"
     );
     println!(
-        "| mesh | triangles | colliding | ours median µs | parry median µs | ratio | ours build ms | parry build ms | build ratio |"
+        "| mesh | triangles | colliding | ours median µs | best exact median µs | parry median µs | ratio | best exact ratio | poses unlike parry | best exact unlike ours | ours build ms | parry build ms | build ratio |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for case in cases {
         let mut ws = QueryWorkspace::new();
-        let (ours, hits_ours) = median_query_ns(&case.poses, |p| {
-            intersects(&case.ours, &Pose::IDENTITY, &case.ours, p, &mut ws)
-        });
-        let (parry, hits_parry) = median_query_ns(&case.poses, |p| {
+        let mut adb_ws = AdbWorkspace::new();
+        let parry_answer = |p: &Pose| {
             intersection_test(
                 &ParryPose::IDENTITY,
                 &case.parry,
@@ -162,7 +166,24 @@ fn print_table(cases: &[Case]) {
             )
             .expect("supported")
             .intersecting
+        };
+        let (ours, hits_ours) = median_query_ns(&case.poses, |p| {
+            intersects(&case.ours, &Pose::IDENTITY, &case.ours, p, &mut ws)
         });
+        let (best, _) = median_query_ns(&case.poses, |p| {
+            exact_intersects(&case.adb, &Pose::IDENTITY, &case.adb, p, &mut adb_ws)
+        });
+        let (parry, hits_parry) = median_query_ns(&case.poses, parry_answer);
+        // Pose by pose: where the exact query answers unlike parry3d, and where the best exact
+        // query answers unlike the exact query (never, if it is exact).
+        let (mut unlike_parry, mut unlike_exact) = (0, 0);
+        for p in &case.poses {
+            let exact = intersects(&case.ours, &Pose::IDENTITY, &case.ours, p, &mut ws);
+            unlike_parry += usize::from(exact != parry_answer(p));
+            unlike_exact += usize::from(
+                exact_intersects(&case.adb, &Pose::IDENTITY, &case.adb, p, &mut adb_ws) != exact,
+            );
+        }
         let mesh = case.ours.mesh();
         let build_ours = median_build_ns(|| drop(black_box(CollisionMesh::new(mesh.clone()))));
         let build_parry = median_build_ns(|| drop(black_box(parry_mesh(mesh))));
@@ -172,13 +193,15 @@ fn print_table(cases: &[Case]) {
             format!("{hits_ours} (parry {hits_parry})/{}", case.poses.len())
         };
         println!(
-            "| {} | {} | {} | {:.1} | {:.1} | {:.2}× | {:.1} | {:.1} | {:.2}× |",
+            "| {} | {} | {} | {:.1} | {:.1} | {:.1} | {:.2}× | {:.2}× | {unlike_parry} | {unlike_exact} | {:.1} | {:.1} | {:.2}× |",
             case.name,
             case.triangles,
             colliding,
             ours / 1e3,
+            best / 1e3,
             parry / 1e3,
             ours / parry,
+            best / parry,
             build_ours / 1e6,
             build_parry / 1e6,
             build_ours / build_parry

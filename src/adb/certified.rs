@@ -14,7 +14,7 @@ use crate::geometry::Pose;
 /// triangles); a crossing found in an open mesh's map, a pose it does not settle, trees built
 /// without interior maps, and poses that are not finite all go to [`intersects`] (two open
 /// meshes skip the certificate's lookups altogether). So the answer is the exact query's
-/// (`tests/adb_certified_exact.rs`); only the time differs, most on deep overlaps, which the
+/// (`tests/adb_exact.rs`); only the time differs, most on deep overlaps, which the
 /// certificate settles with a few lookups. `ws` counts the node pairs the traversal visited
 /// ([`QueryWorkspace::node_pairs_visited`]): 0 when the certificate answered.
 ///

@@ -20,6 +20,9 @@
 //!   connected surface outside it prove that the surfaces cross.
 //! - [`certified_intersects`]: the exact query with that certificate as a pre-pass, trusted
 //!   only in exact maps: always the answer of [`crate::bvh::intersects`], often sooner.
+//! - [`exact_intersects`]: the fastest exact query of the crate ([`AdbQuery::exact`]): the
+//!   certificate where it is exact, then the ADB traversal with its slabs and straddle order
+//!   and exact leaves, never an estimate: always [`crate::bvh::intersects`]'s answer.
 //!
 //! # Which answers are certain
 //! "Collision" is certain (probability 1) when an exact leaf test found an intersecting
@@ -46,6 +49,7 @@ mod clearance;
 mod confidence_fit;
 mod descent;
 mod estimator;
+mod exact;
 mod fit;
 mod interior;
 mod options;
@@ -67,6 +71,7 @@ pub use estimator::{
     CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator, PlanarityEstimator,
     eq9_probability,
 };
+pub use exact::exact_intersects;
 pub use fit::FittedEstimator;
 pub use interior::{
     InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, PairLookup, SampleLookup,

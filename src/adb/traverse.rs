@@ -108,6 +108,19 @@ impl AdbQuery {
         }
     }
 
+    /// The exact query on ADB-trees: `p_min = 1`, no budget, exact leaves, no pruning, the
+    /// straddle order, and the interpenetration certificate first (it settles a query only in
+    /// an [exact](super::InteriorMap::is_exact) map). Only exact hits, exact certificates and
+    /// an emptied queue answer, so the answer is [`crate::bvh::intersects`]'s; the nodes'
+    /// slabs, the straddle order and the certificate make it faster
+    /// ([`exact_intersects`](super::exact_intersects)).
+    pub fn exact() -> Self {
+        Self {
+            p_min: 1.0,
+            ..Self::default()
+        }
+    }
+
     /// The default query with a time budget.
     pub fn with_budget(budget: Budget) -> Self {
         Self {
@@ -531,7 +544,12 @@ impl Traversal<'_> {
         let mut descent = Descent {
             pops: 0,
             unclocked: 0,
-            next_check: FIRST_EVIDENCE_CHECK,
+            // With `p_min = 1` no estimate can count as evidence: no check is made.
+            next_check: if s.query.p_min >= 1.0 {
+                u32::MAX
+            } else {
+                FIRST_EVIDENCE_CHECK
+            },
             visited: found.out.node_pairs_visited,
             ordered: straddle_order(apart),
         };
@@ -839,6 +857,14 @@ fn certificate(
     let (Some(map_a), Some(map_b)) = (a.interior(), b.interior()) else {
         return Certificate::Unavailable;
     };
+    // A crossing counts only in a map whose confidence reaches `p_min`: where neither map's
+    // does (two open meshes under `p_min = 1`), the lookups could settle nothing.
+    let may_settle = |map: &InteriorMap| {
+        map.certificate_confidence() >= query.p_min && map.certificate_confidence() > 0.0
+    };
+    if !may_settle(map_a) && !may_settle(map_b) {
+        return Certificate::Unavailable;
+    }
     // The sample was looked up in the map of the mesh it lies in: that map's confidence.
     let (cert, frame_pose, confidence) = match InteriorMap::look_up_pair(map_a, map_b, rel) {
         PairLookup::Crossing(PairCrossing::SecondInFirst(c)) => {

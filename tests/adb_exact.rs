@@ -1,12 +1,16 @@
 //! `certified_intersects` (the exact query with the interpenetration certificate as a
-//! pre-pass) gives the exact query's answer on every pose: closed meshes, where the certificate
-//! settles deep overlaps; open meshes, where a crossing found in their approximate map must not
-//! be trusted; nested boxes on the map's grid; pairs of different meshes; non-finite poses. The
+//! pre-pass) and `exact_intersects` (the best exact query: the certificate where exact, then
+//! the ADB traversal with `p_min = 1`, its slabs and straddle order) give the exact query's
+//! answer on every pose: closed meshes, where the certificate settles deep overlaps; open
+//! meshes, where a crossing found in their approximate map must not be trusted; nested boxes on
+//! the map's grid, touching and crossing; pairs of different meshes; non-finite poses. The
 //! pre-pass is checked to settle poses, so the test exercises it.
 mod common;
 
 use glam::{Quat, Vec3};
-use stochastic_collision::adb::{AdbTree, InteriorMap, PairCrossing, certified_intersects};
+use stochastic_collision::adb::{
+    AdbTree, AdbWorkspace, InteriorMap, PairCrossing, certified_intersects, exact_intersects,
+};
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::{TriMesh, generate};
@@ -32,6 +36,7 @@ fn settled_by_certificate(a: &AdbTree, b: &AdbTree, rel: &Pose) -> bool {
 /// how many the certificate settled.
 fn agree(a: &AdbTree, b: &AdbTree, count: usize, seed: u64, extra: &[Pose]) -> usize {
     let mut ws = QueryWorkspace::new();
+    let mut adb_ws = AdbWorkspace::new();
     let poses = near_contact_poses(a.collision_mesh(), b.collision_mesh(), count, 0.15, seed);
     let mut settled = 0;
     let frame = Pose::new(Vec3::new(0.3, -1.0, 2.0), Quat::from_rotation_z(0.7));
@@ -46,7 +51,9 @@ fn agree(a: &AdbTree, b: &AdbTree, count: usize, seed: u64, extra: &[Pose]) -> u
             &mut ws,
         );
         let certified = certified_intersects(a, &pose_a, b, &pose_b, &mut ws);
-        assert_eq!(certified, exact, "pose {rel:?}");
+        assert_eq!(certified, exact, "certified, pose {rel:?}");
+        let best = exact_intersects(a, &pose_a, b, &pose_b, &mut adb_ws);
+        assert_eq!(best, exact, "best exact, pose {rel:?}");
         settled += usize::from(settled_by_certificate(a, b, &rel));
     }
     settled
@@ -103,6 +110,21 @@ fn non_finite_poses_collide_nowhere() {
         &ball,
         &Pose::IDENTITY,
         &mut ws
+    ));
+    let mut adb_ws = AdbWorkspace::new();
+    assert!(!exact_intersects(
+        &ball,
+        &Pose::IDENTITY,
+        &ball,
+        &nan,
+        &mut adb_ws
+    ));
+    assert!(!exact_intersects(
+        &ball,
+        &nan,
+        &ball,
+        &Pose::IDENTITY,
+        &mut adb_ws
     ));
 }
 
