@@ -12,7 +12,8 @@ topics=("$@")
 [ ${#topics[@]} -eq 0 ] && topics=(adb performance ccd tracking plugin)
 
 adb() { # docs/adb.md: the accuracy-against-time report (each mesh against itself, the
-  # evaluation seed and a held-out seed) and held-out pairs of different meshes
+  # evaluation seed and a held-out seed), held-out pairs of different meshes, shallow contacts,
+  # and the answer model's fit
   local r="cargo run --release --quiet --example accuracy_vs_time --"
   run_adb() { # out-dir args...
     local out=$1
@@ -25,6 +26,12 @@ adb() { # docs/adb.md: the accuracy-against-time report (each mesh against itsel
   run_adb docs/adb/seed7 --full --poses 300 --seed 7
   run_adb docs/adb/pairs --pairs --poses 300
   run_adb docs/adb/shallow --full --poses 300 --spread 0.02
+  # The answer model (adb::AnswerModel::FITTED): its fit on the training pairs and seeds, and
+  # its held-out check.
+  mkdir -p docs/adb/answer_model
+  { echo "\$ cargo run --release --example fit_answer_model -- --poses 80"
+    cargo run --release --quiet --example fit_answer_model -- --poses 80 2>/dev/null; } |
+    tee docs/adb/answer_model/output.txt
 }
 
 performance() { # docs/performance.md: the exact query against parry3d

@@ -49,8 +49,9 @@ use std::time::{Duration, Instant};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, Decision, MAX_SURFACE_SAMPLES, Order,
-    PlanarityEstimator, adb_intersects, certified_intersects, exact_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, AnswerConfidence, AnswerModel, Budget,
+    Decision, MAX_SURFACE_SAMPLES, Order, PlanarityEstimator, adb_intersects, certified_intersects,
+    exact_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects, root_boxes_overlap};
 use stochastic_collision::geometry::Pose;
@@ -318,6 +319,21 @@ fn configs() -> Vec<Config> {
             },
         });
     }
+    // The answer model undone (the frontier's raw confidence, the tree's own fit for a mesh
+    // against itself), and the answer model for every pair (the tree's own fit undone).
+    for (label, answer_confidence) in [
+        (PER_MESH_20_LABEL, AnswerConfidence::PerMesh),
+        (MODEL_20_LABEL, AnswerConfidence::Model(AnswerModel::FITTED)),
+    ] {
+        out.push(Config {
+            label: label.into(),
+            family: "estimator",
+            query: AdbQuery {
+                answer_confidence,
+                ..tuned(0.99, 10, 0.0, Budget::Time(Duration::from_micros(20)))
+            },
+        });
+    }
     // The interpenetration certificate undone: what it is worth, unbudgeted and under a
     // budget.
     for (label, budget) in [
@@ -383,6 +399,10 @@ const NO_INTERIOR_LABEL: &str = "calibrated p0.99 k10 no-interior";
 const DEFAULT_LABEL: &str = "calibrated p0.99 k10";
 const PAPER_LABEL: &str = "paper p0.99 k10";
 const BUDGET_20_LABEL: &str = "calibrated p0.99 k10 20us";
+/// The 20 µs budget without the answer model (the per-mesh confidence fit only).
+const PER_MESH_20_LABEL: &str = "calibrated p0.99 k10 20us per-mesh";
+/// The 20 µs budget with the answer model for every pair (no per-mesh fit).
+const MODEL_20_LABEL: &str = "calibrated p0.99 k10 20us model";
 const BUDGET_5_LABEL: &str = "calibrated p0.99 k10 5us";
 const NODE_BUDGET_100_LABEL: &str = "calibrated p0.99 k10 100nodes";
 const ESTIMATED_LEAVES_LABEL: &str = "calibrated p0.99 k10 estimated-leaves";

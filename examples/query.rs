@@ -93,7 +93,7 @@ enum Mode {
 
 /// What the command line asks for.
 enum Command {
-    Run(Args),
+    Run(Box<Args>),
     Help,
 }
 
@@ -266,13 +266,13 @@ fn parse_args(mut it: impl Iterator<Item = OsString>) -> Result<Command, String>
         Some(other) => return Err(format!("unknown mode `{other}` (known: exact, adb)")),
         None => return Err(missing("--mode")),
     };
-    Ok(Command::Run(Args {
+    Ok(Command::Run(Box::new(Args {
         a: a.ok_or_else(|| missing("--a"))?,
         b: b.ok_or_else(|| missing("--b"))?,
         poses: poses.ok_or_else(|| missing("--poses"))?,
         out,
         mode,
-    }))
+    })))
 }
 
 /// The time budget of `--budget-us`: finite, at least 1 ns (a value that would round to no
@@ -503,7 +503,7 @@ fn run(args: Args) -> Result<(), String> {
 
 fn main() -> ExitCode {
     let result = parse_args(std::env::args_os().skip(1)).and_then(|command| match command {
-        Command::Run(args) => run(args),
+        Command::Run(args) => run(*args),
         Command::Help => writeln!(std::io::stdout().lock(), "{USAGE}\n\n{HELP}")
             .map_err(|e| format!("cannot write to stdout: {e}")),
     });

@@ -4,8 +4,9 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use stochastic_collision::adb::{
-    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, Budget, CalibratedEstimator,
-    CollisionEstimator, Decision, Order, PaperEstimator, PlanarityEstimator, adb_intersects,
+    AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, AnswerConfidence, AnswerModel, Budget,
+    CalibratedEstimator, CollisionEstimator, Decision, Order, PaperEstimator, PlanarityEstimator,
+    adb_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects};
 use stochastic_collision::geometry::{Pose, triangles_intersect};
@@ -661,7 +662,8 @@ fn straddle_still_decides_on_evidence_and_reports_its_frontier() {
 }
 
 /// The confidence a failed certificate maps through is fitted on a tree against itself: it
-/// applies to such a pair, and between two trees (even of the same mesh) the frontier's
+/// applies to such a pair; between two trees (even of the same mesh) the answer model gives the
+/// confidence by default, and without it ([`AnswerConfidence::PerMesh`]) the frontier's
 /// confidence stands, as without the certificate (a thin wall's map says little of a ball).
 #[test]
 fn the_failed_certificate_calibration_applies_only_to_a_tree_against_itself() {
@@ -671,11 +673,16 @@ fn the_failed_certificate_calibration_applies_only_to_a_tree_against_itself() {
     let mut ws = AdbWorkspace::new();
     let budgeted = AdbQuery {
         budget: Budget::NodePairs(12),
+        answer_confidence: AnswerConfidence::PerMesh,
         ..AdbQuery::default()
     };
     let plain = AdbQuery {
         interior_after: None,
         ..budgeted.clone()
+    };
+    let modelled = AdbQuery {
+        budget: Budget::NodePairs(12),
+        ..AdbQuery::default()
     };
     let (mut mapped, mut compared) = (0, 0);
     let poses = near_contact_poses(tree.collision_mesh(), twin.collision_mesh(), 40, 0.05, 9);
@@ -693,6 +700,17 @@ fn the_failed_certificate_calibration_applies_only_to_a_tree_against_itself() {
         }
         compared += 1;
         assert_eq!(twin_on.probability, twin_off.probability, "at {x}");
+        // By default, the answer model's confidence of the same frontier (the twins are the
+        // same size).
+        let twin_model = with(&twin, &modelled, &mut ws);
+        let frontier = twin_model
+            .frontier
+            .expect("an unsettled answer has a frontier");
+        assert_eq!(
+            twin_model.probability,
+            AnswerModel::FITTED.confidence(&frontier, twin_model.node_pairs_visited, 1.0),
+            "at {x}"
+        );
         let (self_on, self_off) = (
             with(&tree, &budgeted, &mut ws),
             with(&tree, &plain, &mut ws),

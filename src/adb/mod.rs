@@ -40,6 +40,7 @@
 //! Next: [`crate::tracking`] follows the contacts of deforming and self-colliding meshes,
 //! where an ADB-tree (built once per rigid mesh) does not apply.
 
+mod answer_model;
 mod build;
 mod calibration;
 pub mod cells;
@@ -64,6 +65,7 @@ mod tree;
 mod voxel_grid;
 mod voxel_map;
 
+pub use answer_model::{ANSWER_FEATURES, AnswerModel};
 pub use calibration::{Calibration, ConfidenceCalibration, DEPTH_BUCKETS, RAW_BINS};
 pub use certificate_confidence::CertificateReliability;
 pub use certified::certified_intersects;
@@ -78,5 +80,8 @@ pub use interior::{
 };
 pub use options::{AdbBuildOptions, Budget, Decision, FitOptions, Order};
 pub use surface_samples::CERTIFY_CHUNK;
-pub use traverse::{AdbOutcome, AdbQuery, AdbWorkspace, ContactWitness, adb_intersects};
+pub use traverse::{
+    AdbOutcome, AdbQuery, AdbWorkspace, AnswerConfidence, CertificateHint, ContactWitness,
+    Frontier, adb_intersects,
+};
 pub use tree::{AdbBuildProgress, AdbNode, AdbTree};

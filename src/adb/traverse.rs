@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
+use super::answer_model::AnswerModel;
 use super::descent::{
     Descent, DescentEnd, DescentFrame, TRIANGLE_TESTS_PER_POP, budget_spent, leaf_pair_hit,
 };
@@ -69,6 +70,10 @@ pub struct AdbQuery {
     /// and it counts only if that reaches `p_min`, so with `p_min = 1` the answer stays the
     /// exact query's. `Some(0)` (before the traversal) by default.
     pub interior_after: Option<u32>,
+    /// How the confidence of an answer the traversal did not settle is made from its
+    /// [`Frontier`] (by default the tree's own fit for a tree against itself, the
+    /// [`AnswerModel::FITTED`] elsewhere).
+    pub answer_confidence: AnswerConfidence,
 }
 
 impl Default for AdbQuery {
@@ -88,6 +93,7 @@ impl Default for AdbQuery {
             order: Order::Straddle,
             collide_at: 0.5,
             interior_after: Some(0),
+            answer_confidence: AnswerConfidence::PerMeshElseModel(AnswerModel::FITTED),
         }
     }
 }
@@ -104,6 +110,7 @@ impl AdbQuery {
             order: Order::BestFirst,
             exact_leaves: false,
             interior_after: None,
+            answer_confidence: AnswerConfidence::PerMesh,
             ..Self::default()
         }
     }
@@ -184,6 +191,76 @@ pub struct AdbOutcome {
     /// sample found inside and its normal points from the first mesh's box centre to the
     /// second's.
     pub interpenetration: Option<Interpenetration>,
+    /// What an answer the traversal did not settle rests on (`None` for a settled answer: an
+    /// exact hit, a certificate, an emptied queue).
+    pub frontier: Option<Frontier>,
+}
+
+/// How [`adb_intersects`] makes the confidence of an answer it did not settle (a budget ran
+/// out, or leaf pairs were left to their estimates; an answer the evidence decided keeps the
+/// evidence's confidence).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum AnswerConfidence {
+    /// The frontier's raw confidence, mapped by the tree's own
+    /// [`ConfidenceCalibration`](super::ConfidenceCalibration) for a tree against itself after
+    /// a failed certificate (the per-mesh fit, made at build time on the mesh against itself).
+    PerMesh,
+    /// The answer model for every pair of trees.
+    Model(AnswerModel),
+    /// The per-mesh fit where it applies (a tree against itself after a failed certificate),
+    /// the answer model elsewhere (pairs of different trees, answers without a certificate).
+    /// The default, with [`AnswerModel::FITTED`].
+    PerMeshElseModel(AnswerModel),
+}
+
+impl AnswerConfidence {
+    /// Whether the tree's own fit is used where it applies.
+    fn uses_per_mesh_fit(&self) -> bool {
+        !matches!(self, Self::Model(_))
+    }
+
+    /// The answer model, if any.
+    fn model(&self) -> Option<AnswerModel> {
+        match *self {
+            Self::PerMesh => None,
+            Self::Model(m) | Self::PerMeshElseModel(m) => Some(m),
+        }
+    }
+}
+
+/// What the interpenetration certificate said of a pose it did not settle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum CertificateHint {
+    /// It was not tried (no interior maps, [`AdbQuery::interior_after`] not reached, or no
+    /// map whose confidence could reach `p_min`).
+    #[default]
+    NotTried,
+    /// Every sample it looked up lay outside the other mesh: the pose is probably apart
+    /// ([`PairLookup::Apart`]).
+    Apart,
+    /// It found samples inside but no crossing it could trust ([`PairLookup::Undecided`], or
+    /// a crossing in a map whose confidence is below `p_min`).
+    Undecided,
+}
+
+/// The final frontier of an answer the traversal did not settle (a budget ran out, evidence
+/// decided, or leaf pairs were left to their estimates): the node pairs that together cover
+/// every overlapping leaf pair not ruled out, summed up. [`AdbOutcome::probability`] is made
+/// from these (see [`crate::adb::AnswerModel`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Frontier {
+    /// Node pairs in the frontier (queued, and leaf or pruned pairs left for good).
+    pub pairs: u32,
+    /// `1 − (Π (1 − p))^(1/r)` over the frontier's pair probabilities (`r` disjoint pairs
+    /// counting as one independent piece): the confidence before the answer model.
+    pub raw_confidence: f64,
+    /// The highest pair probability in the frontier.
+    pub max_probability: f64,
+    /// The queued pairs' mean relative depth `(d_A + d_B) / (d_maxA + d_maxB)` (1: leaf pairs
+    /// of the deepest leaves; 0 when none is queued).
+    pub mean_depth: f32,
+    /// What the certificate said.
+    pub certificate: CertificateHint,
 }
 
 /// Reusable memory of the ADB traversal (the queue and the exact-leaf workspace).
@@ -242,6 +319,7 @@ pub fn adb_intersects(
         max_pair_probability: 0.0,
         witness: None,
         interpenetration: None,
+        frontier: None,
     };
     // A pose that is not finite places its mesh nowhere.
     if !rel.is_finite() {
@@ -276,7 +354,12 @@ pub fn adb_intersects(
         frontier_log_miss: 0.0,
         region: (Vec3::ZERO, Vec3::ZERO, 0.0),
         best: None,
-        interior_failed: failed.is_some(),
+        certificate: match failed {
+            None => CertificateHint::NotTried,
+            Some(true) => CertificateHint::Apart,
+            Some(false) => CertificateHint::Undecided,
+        },
+        left: (0, 0.0),
     };
     Traversal { scene, found }.run(ws, failed == Some(true))
 }
@@ -326,8 +409,11 @@ struct Found {
     /// The most probable pair, probabilities compared in steps of 1/20 and ties going to the
     /// deeper pair (whose boxes localise the contact better).
     best: Option<((u32, u32), u32, u32)>,
-    /// Whether the interpenetration certificate was tried and settled nothing.
-    interior_failed: bool,
+    /// What the interpenetration certificate said, if it was tried and settled nothing.
+    certificate: CertificateHint,
+    /// Pairs left in the frontier for good (counted in `frontier_log_miss`), and the highest
+    /// probability among them.
+    left: (u32, f64),
 }
 
 /// One query's traversal: [`Traversal::descend`] (the default order's lean loop, in
@@ -466,6 +552,12 @@ impl Found {
         (found, sum)
     }
 
+    /// A pair of probability `p` left in the frontier for good.
+    fn leave(&mut self, p: f64) {
+        self.frontier_log_miss += (1.0 - p).ln();
+        self.left = (self.left.0 + 1, self.left.1.max(p));
+    }
+
     /// An exact hit: the leaf pair `nodes` holds the intersecting triangles.
     fn hit(&mut self, s: &Scene<'_>, nodes: (u32, u32), triangles: TrianglePair) {
         self.out.collides = true;
@@ -484,8 +576,12 @@ impl Found {
             s.query,
             &mut self.out,
         );
-        if let Certificate::Failed { .. } = c {
-            self.interior_failed = true;
+        if let Certificate::Failed { apart } = c {
+            self.certificate = if apart {
+                CertificateHint::Apart
+            } else {
+                CertificateHint::Undecided
+            };
         }
         c
     }
@@ -674,23 +770,63 @@ impl Traversal<'_> {
                 f.out.pairs_found = n;
                 f.out.collides |= n >= query.k_min || sum >= s.evidence_needed;
             }
-            let queued: f64 = ws.queue.iter().map(|e| (1.0 - e.p).ln()).sum();
+            let mut frontier = Frontier {
+                pairs: f.left.0,
+                max_probability: f.left.1,
+                certificate: f.certificate,
+                ..Frontier::default()
+            };
+            let (mut queued, mut depth_sum, mut n) = (0.0, 0u64, 0u32);
+            for e in ws.queue.iter() {
+                queued += (1.0 - e.p).ln();
+                frontier.max_probability = frontier.max_probability.max(e.p);
+                depth_sum += u64::from(s.a.nodes()[e.a as usize].depth)
+                    + u64::from(s.b.nodes()[e.b as usize].depth);
+                n += 1;
+            }
+            frontier.pairs += n;
+            if n > 0 {
+                let max_depths = (s.a.max_depth() + s.b.max_depth()).max(1);
+                frontier.mean_depth =
+                    (depth_sum as f64 / f64::from(n) / f64::from(max_depths)) as f32;
+            }
             // Disjoint pairs of one contact region are correlated: `r` of them count as one
             // independent piece, as in the evidence rules.
             let log_miss = (f.frontier_log_miss + queued) / EVIDENCE_REDUNDANCY;
             f.out.probability = (1.0 - log_miss.exp()).clamp(0.0, 1.0);
+            frontier.raw_confidence = f.out.probability;
+            if frontier.pairs > 0 {
+                f.out.frontier = Some(frontier);
+            }
             // A failed certificate is evidence against the deep overlaps: the confidence as
             // calibrated for such answers on the mesh itself, for a tree against itself, the
             // pairs it was fitted on. Between different trees it does not carry over (a thin
             // wall's map has next to no inside for a ball's samples to land in, so there the
             // certificate's failure says little), and the frontier's confidence stands.
-            if f.interior_failed
-                && std::ptr::eq(s.a, s.b)
-                && f.out.probability > 0.0
-                && f.out.probability < 1.0
-                && let Some(c) = s.a.confidence_calibration()
+            // The tree's own fit applies to a tree against itself after a failed certificate;
+            // the answer model, where the query has one, to the other answers the evidence did
+            // not decide (an answer on evidence keeps the evidence's confidence).
+            let per_mesh = (f.certificate != CertificateHint::NotTried && std::ptr::eq(s.a, s.b))
+                .then(|| s.a.confidence_calibration())
+                .flatten()
+                .filter(|_| query.answer_confidence.uses_per_mesh_fit());
+            let unsettled = f.out.probability > 0.0 && f.out.probability < 1.0;
+            if let Some(c) = per_mesh
+                && unsettled
             {
                 f.out.probability = c.map(f.out.probability).clamp(0.0, MAX_ESTIMATE);
+            } else if let Some(model) = query.answer_confidence.model()
+                && unsettled
+                && !f.out.collides
+                && let Some(frontier) = &f.out.frontier
+            {
+                let size = |t: &AdbTree| {
+                    f64::from(t.collision_mesh().bvh().root_aabb().extents().length())
+                };
+                let ratio = size(s.a) / size(s.b).max(f64::MIN_POSITIVE);
+                f.out.probability = model
+                    .confidence(frontier, f.out.node_pairs_visited, ratio)
+                    .clamp(0.0, MAX_ESTIMATE);
             }
             if !f.out.collides {
                 f.out.collides = match query.decision {
@@ -791,7 +927,7 @@ impl Found {
                     if self.out.pairs_found >= query.k_min || self.evidence >= s.evidence_needed {
                         self.out.collides = true;
                         // It stays in the frontier (not queued: it does not shape the region).
-                        self.frontier_log_miss += (1.0 - p).ln();
+                        self.leave(p);
                         return (queued, n_queued, true);
                     }
                 }
@@ -817,7 +953,7 @@ impl Found {
                     n_queued += 1;
                 } else {
                     // Left in the frontier for good (a leaf pair, or pruned).
-                    self.frontier_log_miss += (1.0 - p).ln();
+                    self.leave(p);
                     if both_leaves && p > 0.0 {
                         // A leaf pair left in the frontier shapes the contact region.
                         let w = s.witness(ia, ib, None);
