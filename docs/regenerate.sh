@@ -26,6 +26,11 @@ adb() { # docs/adb.md: the accuracy-against-time report (each mesh against itsel
   run_adb docs/adb/seed7 --full --poses 300 --seed 7
   run_adb docs/adb/pairs --pairs --poses 300
   run_adb docs/adb/shallow --full --poses 300 --spread 0.02
+  # The published rule checked: on trees built as the papers build them (smooth meshes and
+  # CAD-like parts) and on the CAD-like parts with this crate's trees.
+  run_adb docs/adb/paper/smooth --full --paper-trees --poses 300
+  run_adb docs/adb/paper/cad --cad --paper-trees --poses 300
+  run_adb docs/adb/paper/cad_default_trees --cad --poses 300
   # The answer model (adb::AnswerModel::FITTED): its fit on the training pairs and seeds, and
   # its held-out check.
   mkdir -p docs/adb/answer_model

@@ -15,7 +15,7 @@
 //! of its median pass.
 //!
 //! ```text
-//! cargo run --release --example accuracy_vs_time -- [--full] [--pairs] [--seed S] [--spread F] [--poses N]
+//! cargo run --release --example accuracy_vs_time -- [--full] [--pairs | --cad] [--paper-trees] [--seed S] [--spread F] [--poses N]
 //!     [--out DIR] [--meshes a,b,...] [--resolution R] [--fill F] [--interior-resolution R]
 //!     [--interior-samples N]
 //! ```
@@ -23,7 +23,11 @@
 //! `--pairs`: instead of each mesh against itself, held-out pairs of *different* meshes
 //! (`support/mesh_pairs.rs`: one 10–30× the other, smooth scans against spiky and thin shapes,
 //! CAD-like generated parts; the first of a pair is the smaller, and offsets are in units of its
-//! size). `--seed`: the evaluation poses' seed (default 0xACC0). `--spread F`: offsets from first
+//! size). `--cad`: generated CAD-like parts (a pipe bundle, a box of thin walls, a slotted plate,
+//! layered sheets), each against itself, like the papers' car body, pipes and door lock.
+//! `--paper-trees`: trees built as the papers build them (`AdbBuildOptions::paper`: the published
+//! MaxArea, boxes without slabs, no fits, no interior map; give it before `--resolution` or
+//! `--fill` to change those). `--seed`: the evaluation poses' seed (default 0xACC0). `--spread F`: offsets from first
 //! contact within ±F of the size (default 0.15; 0.02 for shallow contacts only).
 //!
 //! Default: a quick run (generated meshes and the shared bunny, 150 poses each) in seconds.
@@ -50,8 +54,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use stochastic_collision::adb::{
     AdbBuildOptions, AdbQuery, AdbTree, AdbWorkspace, AnswerConfidence, AnswerModel, Budget,
-    Decision, MAX_SURFACE_SAMPLES, Order, PlanarityEstimator, adb_intersects, certified_intersects,
-    exact_intersects,
+    Decision, MAX_SURFACE_SAMPLES, Order, PlanarityEstimator, TRAINING_MESHES, TRAINING_SEEDS,
+    adb_intersects, certified_intersects, exact_intersects,
 };
 use stochastic_collision::bvh::{CollisionMesh, QueryWorkspace, intersects, root_boxes_overlap};
 use stochastic_collision::geometry::Pose;
@@ -106,12 +110,16 @@ struct Settings {
     build: AdbBuildOptions,
     /// Pairs of different meshes (`mesh_pairs`) instead of each mesh against itself.
     pairs: bool,
+    /// Generated CAD-like parts (`mesh_pairs::cad_parts`), each against itself.
+    cad: bool,
     /// Seed of the evaluation poses.
     seed: u64,
 }
 
-/// The evaluation poses' default seed (not the seeds of the calibration's training poses).
-const EVALUATION_SEED: u64 = 0xACC0;
+/// The evaluation poses' default seed: the one the ADB defaults were chosen on
+/// (`adb::TRAINING_SEEDS`; not the seeds of the build-time fits' training poses). Held-out runs
+/// take another (`--seed`).
+const EVALUATION_SEED: u64 = TRAINING_SEEDS[0];
 
 fn parse_args() -> Result<Settings, String> {
     let mut s = Settings {
@@ -121,6 +129,7 @@ fn parse_args() -> Result<Settings, String> {
         meshes: None,
         build: AdbBuildOptions::default(),
         pairs: false,
+        cad: false,
         seed: EVALUATION_SEED,
     };
     let mut it = std::env::args().skip(1);
@@ -128,6 +137,8 @@ fn parse_args() -> Result<Settings, String> {
         match flag.as_str() {
             "--full" => s.full = true,
             "--pairs" => s.pairs = true,
+            "--cad" => s.cad = true,
+            "--paper-trees" => s.build = AdbBuildOptions::paper(),
             "--spread" => {
                 let v = it
                     .next()
@@ -191,7 +202,7 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --full, --pairs, --seed S, --spread F, --poses N, --out DIR, \
+                    "unknown argument `{other}` (known: --full, --pairs, --cad, --paper-trees, --seed S, --spread F, --poses N, --out DIR, \
                      --meshes a,b, --resolution R, --fill F, --interior-resolution R, \
                      --interior-samples N)"
                 ));
@@ -320,10 +331,13 @@ fn configs() -> Vec<Config> {
         });
     }
     // The answer model undone (the frontier's raw confidence, the tree's own fit for a mesh
-    // against itself), and the answer model for every pair (the tree's own fit undone).
+    // against itself), and the tree's own fit where it applies with the model elsewhere.
     for (label, answer_confidence) in [
         (PER_MESH_20_LABEL, AnswerConfidence::PerMesh),
-        (MODEL_20_LABEL, AnswerConfidence::Model(AnswerModel::FITTED)),
+        (
+            PER_MESH_ELSE_MODEL_20_LABEL,
+            AnswerConfidence::PerMeshElseModel(AnswerModel::FITTED),
+        ),
     ] {
         out.push(Config {
             label: label.into(),
@@ -401,8 +415,8 @@ const PAPER_LABEL: &str = "paper p0.99 k10";
 const BUDGET_20_LABEL: &str = "calibrated p0.99 k10 20us";
 /// The 20 µs budget without the answer model (the per-mesh confidence fit only).
 const PER_MESH_20_LABEL: &str = "calibrated p0.99 k10 20us per-mesh";
-/// The 20 µs budget with the answer model for every pair (no per-mesh fit).
-const MODEL_20_LABEL: &str = "calibrated p0.99 k10 20us model";
+/// The 20 µs budget with the per-mesh fit where it applies, the answer model elsewhere.
+const PER_MESH_ELSE_MODEL_20_LABEL: &str = "calibrated p0.99 k10 20us per-mesh+model";
 const BUDGET_5_LABEL: &str = "calibrated p0.99 k10 5us";
 const NODE_BUDGET_100_LABEL: &str = "calibrated p0.99 k10 100nodes";
 const ESTIMATED_LEAVES_LABEL: &str = "calibrated p0.99 k10 estimated-leaves";
@@ -444,6 +458,12 @@ fn shared_dir() -> PathBuf {
 /// The cases of the report: each mesh against itself (no second mesh), or with `--pairs` the
 /// held-out pairs of different meshes.
 fn cases(settings: &Settings) -> Vec<(String, TriMesh, Option<TriMesh>)> {
+    if settings.cad {
+        return mesh_pairs::cad_parts()
+            .into_iter()
+            .map(|(name, mesh)| (name, mesh, None))
+            .collect();
+    }
     if settings.pairs {
         return mesh_pairs::held_out_pairs(&shared_dir())
             .into_iter()
@@ -458,19 +478,13 @@ fn cases(settings: &Settings) -> Vec<(String, TriMesh, Option<TriMesh>)> {
 
 fn meshes(settings: &Settings) -> Vec<(String, TriMesh)> {
     let shared_dir = shared_dir();
-    let mut names: Vec<&str> = vec!["icosphere_20k", "torus_32k", "bunny"];
-    if settings.full {
-        names = vec![
-            "icosphere_20k",
-            "torus_32k",
-            "bunny",
-            "armadillo",
-            "dragon_50k",
-            "stanford-bunny",
-            "small_intestine_100k",
-            "ogre",
-        ];
-    }
+    // `--full`: the eight meshes the defaults were chosen on (`adb::TRAINING_MESHES`); the
+    // quick run, the first three of them.
+    let names: &[&str] = if settings.full {
+        &TRAINING_MESHES
+    } else {
+        &TRAINING_MESHES[..3]
+    };
     let wanted: Vec<String> = match &settings.meshes {
         Some(list) => list.clone(),
         None => names.iter().map(|s| s.to_string()).collect(),
@@ -497,6 +511,10 @@ struct Answer {
     probability: f64,
     time_ns: f64,
     nodes: u64,
+    /// Node pairs counted as evidence (`AdbOutcome::pairs_found`; 0 for the exact queries).
+    pairs_found: u32,
+    /// The highest pair probability estimated (`AdbOutcome::max_pair_probability`).
+    max_pair: f64,
 }
 
 struct PoseRecord {
@@ -538,6 +556,23 @@ fn build_tree(name: &str, mesh: TriMesh, build: AdbBuildOptions) -> AdbTree {
     });
     let build_s = start.elapsed().as_secs_f64();
     let tris = tree.collision_mesh().mesh().triangle_count();
+    // How full the cells are: what the papers' rule needs (a node pair whose nodes have no
+    // well-filled cell in their overlap has probability 0 and is never expanded by it).
+    let nodes = tree.nodes();
+    let filled = nodes.iter().filter(|n| n.well_filled > 0).count();
+    let mean = nodes.iter().map(|n| f64::from(n.well_filled)).sum::<f64>() / nodes.len() as f64;
+    println!(
+        "{name}: {:.1} % of the nodes have a well-filled cell, {mean:.1} of {} cells per node on \
+         average (fill fraction {}, slabs {})",
+        100.0 * filled as f64 / nodes.len() as f64,
+        tree.cells_per_node(),
+        tree.options().fill_fraction,
+        if tree.options().normal_slabs {
+            "on"
+        } else {
+            "off"
+        },
+    );
     eprintln!(
         "  {name}: {tris} triangles, {total_nodes} nodes, ADB build {:.2} s ({:.0} k triangles/s)",
         build_s,
@@ -612,6 +647,8 @@ fn run_mesh(
                         probability: if hit { 1.0 } else { 0.0 },
                         time_ns: t.elapsed().as_nanos() as f64,
                         nodes,
+                        pairs_found: 0,
+                        max_pair: 0.0,
                     }
                 } else {
                     let o = adb_intersects(
@@ -627,6 +664,8 @@ fn run_mesh(
                         probability: o.probability,
                         time_ns: t.elapsed().as_nanos() as f64,
                         nodes: o.node_pairs_visited,
+                        pairs_found: o.pairs_found,
+                        max_pair: o.max_pair_probability,
                     }
                 };
                 pose_runs.push(answer);
@@ -742,6 +781,21 @@ fn main() {
     let mut triangles: BTreeMap<String, usize> = BTreeMap::new();
     let mut order = Vec::new();
     for (name, mesh, second) in cases(&settings) {
+        // Training: a mesh of `adb::TRAINING_MESHES` against itself, at the training seed and
+        // the default spread; everything else is held out.
+        let training = second.is_none()
+            && !settings.cad
+            && TRAINING_MESHES.contains(&name.as_str())
+            && TRAINING_SEEDS.contains(&settings.seed)
+            && spread() == DEFAULT_SPREAD;
+        println!(
+            "{name}: {}",
+            if training {
+                "training (the ADB defaults were chosen on this mesh and these poses)"
+            } else {
+                "held out (the ADB defaults were not chosen on this mesh, seed or spread)"
+            }
+        );
         let (records, tris) = run_mesh(
             &name,
             mesh,
@@ -1110,6 +1164,40 @@ fn write_targets(
             b.p99_us,
             mark(b.p99_us <= TARGET_BUDGET_P99 * BUDGET_20_US),
         );
+    }
+
+    // Why the papers' rule answers as it does: on the colliding poses, how many node pairs
+    // reached p_min (it needs k_min of them) and how probable the most probable pair was.
+    if let Some(paper) = index(PAPER_LABEL) {
+        let p_min = configs[paper].query.p_min;
+        let k_min = configs[paper].query.k_min;
+        println!(
+            "{PAPER_LABEL} on colliding poses (it says \"collision\" once {k_min} node pairs reach \
+             p ≥ {p_min}): poses with a pair at p_min, median pairs found, median highest pair \
+             probability:"
+        );
+        for name in order {
+            let colliding: Vec<Answer> = all[name]
+                .iter()
+                .filter(|r| r.exact.collides)
+                .map(|r| r.adb[paper])
+                .collect();
+            if colliding.is_empty() {
+                continue;
+            }
+            let at_p_min = colliding.iter().filter(|a| a.max_pair >= p_min).count();
+            let mut found: Vec<f64> = colliding.iter().map(|a| f64::from(a.pairs_found)).collect();
+            let mut highest: Vec<f64> = colliding.iter().map(|a| a.max_pair).collect();
+            println!(
+                "  {name}: {} of {} colliding poses have a pair at p_min; {:.0} pairs found, \
+                 highest {:.3} (medians); {} answered \"collision\"",
+                at_p_min,
+                colliding.len(),
+                median(&mut found),
+                median(&mut highest),
+                colliding.iter().filter(|a| a.collides).count(),
+            );
+        }
     }
 
     // Where the time goes, by the exact answer.

@@ -1,9 +1,9 @@
 //! Fits the ADB answer model (`adb::AnswerModel`): the confidence of answers the traversal did
 //! not settle, from features that mean the same for any pair of trees. Training: the pairs and
-//! seeds named below (`TRAINING_PAIRS`, `TRAINING_SEEDS`), every pose answered under a range of
+//! seeds named below (`training_pairs`, `TRAINING_SEEDS`), every pose answered under a range of
 //! node budgets and checked by the exact query. Held out: the accuracy report's pairs of
-//! different meshes (`support/mesh_pairs.rs`) and same-mesh pairs of shared meshes not in the
-//! training set, on other seeds, under a 20 µs time budget. Prints the fitted weights (the
+//! different meshes and CAD-like parts (`support/mesh_pairs.rs`) and same-mesh pairs of shared
+//! meshes not in the training set, on other seeds, under a 20 µs time budget. Prints the fitted weights (the
 //! `AnswerModel::FITTED` constant) and, on the held-out answers, the Brier score and error of
 //! the frontier's raw confidence, of the confidence the query reports, and of the fitted model.
 //!
@@ -113,15 +113,40 @@ fn training_pairs() -> Vec<(String, TriMesh, TriMesh)> {
     out
 }
 
-/// The generated training pairs.
+/// The generated training pairs: a ball, a torus, a thin plate, an open cloth and an open
+/// tube of thousands of triangles, and small ones of hundreds.
 fn generated_pairs() -> Vec<(String, TriMesh, TriMesh)> {
     let ball = generate::icosphere(1.0, 4);
     let torus = generate::torus(1.0, 0.3, 96, 32);
     let plate = generate::cuboid(Vec3::new(1.0, 0.02, 1.0), 8);
     let cloth = generate::cloth_grid(2.0, 2.0, 48, 48);
     let tube = generate::tube(0.3, 2.0, 48, 24, false);
+    // Small meshes too (hundreds of triangles), where the same work covers most of a tree.
+    let small_ball = generate::icosphere(1.0, 2);
+    let small_torus = generate::torus(1.0, 0.4, 24, 10);
+    let small_cloth = generate::cloth_grid(2.0, 2.0, 12, 12);
     let s = size(&ball);
     vec![
+        (
+            "small ball vs small ball".into(),
+            small_ball.clone(),
+            small_ball.clone(),
+        ),
+        (
+            "small torus vs small torus".into(),
+            small_torus.clone(),
+            small_torus.clone(),
+        ),
+        (
+            "small ball vs small cloth".into(),
+            sized(&small_ball, s / 2.0),
+            sized(&small_cloth, s),
+        ),
+        (
+            "small torus/5 vs torus".into(),
+            sized(&small_torus, s / 5.0),
+            sized(&torus, s),
+        ),
         ("ball vs ball".into(), ball.clone(), ball.clone()),
         ("torus vs torus".into(), torus.clone(), torus.clone()),
         (
@@ -143,13 +168,16 @@ fn generated_pairs() -> Vec<(String, TriMesh, TriMesh)> {
     ]
 }
 
-/// The held-out pairs: the report's pairs of different meshes, and shared meshes the training
-/// never saw against themselves.
+/// The held-out pairs: the report's pairs of different meshes, its generated CAD-like parts
+/// against themselves, and shared meshes the training never saw against themselves.
 fn held_out_pairs() -> Vec<(String, TriMesh, TriMesh)> {
     let mut out: Vec<_> = mesh_pairs::held_out_pairs(&shared_dir())
         .into_iter()
         .map(|p| (p.name, p.first, p.second))
         .collect();
+    for (name, part) in mesh_pairs::cad_parts() {
+        out.push((format!("{name} vs {name}"), part.clone(), part));
+    }
     for name in ["spot", "teapot", "large_intestine_20k", "suzanne"] {
         match TriMesh::from_obj(shared_dir().join(format!("{name}.obj"))) {
             Ok(m) => out.push((format!("{name} vs {name}"), m.clone(), m)),
@@ -187,6 +215,7 @@ fn collect(
         let tb = AdbTree::new(CollisionMesh::new(b.clone()));
         let (ca, cb) = (ta.collision_mesh(), tb.collision_mesh());
         let size_ratio = f64::from(size(a) / size(b));
+        let tree_nodes = (ta.nodes().len() + tb.nodes().len()) as u64;
         for &seed in seeds {
             for spread in SPREADS {
                 for p in near_contact_poses(ca, cb, poses, spread, seed) {
@@ -205,7 +234,12 @@ fn collect(
                             continue;
                         };
                         samples.push(Sample {
-                            x: AnswerModel::features(&f, out.node_pairs_visited, size_ratio),
+                            x: AnswerModel::features(
+                                &f,
+                                out.node_pairs_visited,
+                                size_ratio,
+                                tree_nodes,
+                            ),
                             reported: out.probability,
                             truth,
                         });

@@ -103,3 +103,34 @@ fn the_certificate_measurement_can_be_turned_off() {
         assert_eq!(out.collides, truth, "{pose:?}");
     }
 }
+
+/// Trees built as the papers build them: boxes only (every slab infinite), the published
+/// MaxArea (fewer well-filled cells than the default's half of it), none of the fits or the
+/// interior map; their exact queries still answer exactly.
+#[test]
+fn paper_trees_have_boxes_only_and_the_published_max_area() {
+    let mesh = || CollisionMesh::new(generate::torus(1.0, 0.3, 32, 12));
+    let paper = AdbTree::build_with(mesh(), AdbBuildOptions::paper());
+    let default = AdbTree::new(mesh());
+    assert!(paper.calibration().is_none());
+    assert!(paper.confidence_calibration().is_none());
+    assert!(paper.interior().is_none());
+    assert!(
+        paper
+            .nodes()
+            .iter()
+            .all(|n| n.slab[0] == f32::NEG_INFINITY && n.slab[1] == f32::INFINITY)
+    );
+    assert!(default.nodes().iter().any(|n| n.slab[0].is_finite()));
+    let filled = |t: &AdbTree| {
+        t.nodes()
+            .iter()
+            .map(|n| u32::from(n.well_filled))
+            .sum::<u32>()
+    };
+    assert!(filled(&paper) < filled(&default));
+    for (p, d) in paper.nodes().iter().zip(default.nodes()) {
+        assert!(p.well_filled <= d.well_filled);
+    }
+    answers_exactly(&paper);
+}

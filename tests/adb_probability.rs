@@ -547,6 +547,36 @@ fn overlap_volume_policy() {
     assert_eq!(overlap_volume(cube, cube, f32::NAN), 0.0);
 }
 
+/// Two trees of different grid resolutions: each fill density is over its own grid (a node
+/// whose every cell is well filled counts every overlap cell, whatever the other's resolution),
+/// and with equal grids the counts are `cell_counts`'.
+#[test]
+fn cell_counts_of_different_grids_use_each_trees_own_density() {
+    // A: 2³ cells, all well filled; B: 4³ cells, a quarter well filled; full overlap.
+    let c = cell_counts_of_grids(8.0, (8.0, 8, 8), (8.0, 16, 64));
+    assert_eq!(
+        c,
+        CellCounts {
+            s: 64,
+            s_a: 64,
+            s_b: 16
+        }
+    );
+    // Swapped, the same counts swapped.
+    let d = cell_counts_of_grids(8.0, (8.0, 16, 64), (8.0, 8, 8));
+    assert_eq!((d.s, d.s_a, d.s_b), (c.s, c.s_b, c.s_a));
+    for (v, wa, wb) in [(8.0, 16, 40), (4.0, 3, 60), (1.0, 64, 0)] {
+        assert_eq!(
+            cell_counts_of_grids(v, (8.0, wa, 64), (8.0, wb, 64)),
+            cell_counts(v, 8.0, 8.0, wa, wb, 64)
+        );
+    }
+    assert_eq!(
+        cell_counts_of_grids(4.0, (8.0, 3, 0), (8.0, 3, 64)),
+        CellCounts::default()
+    );
+}
+
 #[test]
 fn cell_count_invariants() {
     // Equal nodes fully overlapping: every cell, densities carried over.

@@ -188,14 +188,16 @@ fn node_budget_answers_are_identical_run_to_run_and_respect_the_budget() {
 /// Where a node budget leaves the answer to the estimates, the reported confidence means what
 /// it says: over the answers it does not settle (probability strictly between 0 and 1), the
 /// mean confidence is close to the share that truly collides, and it separates the colliding
-/// poses from the others better than that share alone (a lower Brier score).
+/// poses from the others better than that share alone (a lower Brier score). Checked for the
+/// default answer model and for the per-mesh fit (which the model replaced as the default; on
+/// these small meshes, the per-mesh fit's own training ground, it is the closer on average).
 #[test]
 fn budgeted_confidence_is_calibrated_against_the_exact_answer() {
     let mut ws = AdbWorkspace::new();
     let mut exact_ws = QueryWorkspace::new();
     // (reported probability, truly colliding) of the unsettled answers, without and with the
-    // interpenetration certificate.
-    let mut unsettled: [Vec<(f64, f64)>; 2] = Default::default();
+    // interpenetration certificate, and with the certificate under the per-mesh fit.
+    let mut unsettled: [Vec<(f64, f64)>; 3] = Default::default();
     for (name, t) in trees().iter().take(2) {
         let m = t.collision_mesh();
         let poses = near_contact_poses(m, m, 48, 0.1, 21);
@@ -210,12 +212,20 @@ fn budgeted_confidence_is_calibrated_against_the_exact_answer() {
                 interior_after: if interior { Some(0) } else { None },
                 ..AdbQuery::with_budget(Budget::NodePairs(budget))
             };
+            let per_mesh = AdbQuery {
+                answer_confidence: AnswerConfidence::PerMesh,
+                ..query.clone()
+            };
             for p in &poses {
                 let o = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &query, &mut ws);
                 let truth = intersects(m, &Pose::IDENTITY, m, &p.pose, &mut exact_ws);
                 if o.probability > 0.0 && o.probability < 1.0 {
                     unsettled[usize::from(interior)]
                         .push((o.probability, f64::from(u8::from(truth))));
+                }
+                let f = adb_intersects(t, &Pose::IDENTITY, t, &p.pose, &per_mesh, &mut ws);
+                if interior && f.probability > 0.0 && f.probability < 1.0 {
+                    unsettled[2].push((f.probability, f64::from(u8::from(truth))));
                 }
                 assert!(
                     o.probability < 1.0 || truth,
@@ -238,9 +248,20 @@ fn budgeted_confidence_is_calibrated_against_the_exact_answer() {
         "Brier {brier:.4} not below the base rate's {base:.4}"
     );
     // With it (the default): the answers a failed certificate leaves unsettled collide far less
-    // often than the frontier says (without the fitted confidence: mean 0.52 against a rate
-    // of 0.12); the fitted confidence keeps them calibrated.
+    // often than the frontier says (raw: mean 0.52 against a rate of 0.12). The answer model
+    // takes most of that into account (measured: mean 0.24 against 0.08, Brier 0.041 against
+    // the base rate's 0.077); the per-mesh fit, fitted on these very meshes, is closer on
+    // average (0.13) but separates them less well (Brier 0.063).
     let (mean_p, rate, brier, base) = calibration(&unsettled[1], "with the certificate");
+    assert!(
+        (mean_p - rate).abs() <= 0.2,
+        "mean {mean_p:.3} vs {rate:.3}"
+    );
+    assert!(
+        brier < base,
+        "Brier {brier:.4} not below the base rate's {base:.4}"
+    );
+    let (mean_p, rate, brier, base) = calibration(&unsettled[2], "per-mesh fit");
     assert!(
         (mean_p - rate).abs() <= 0.1,
         "mean {mean_p:.3} vs {rate:.3}"
@@ -708,7 +729,12 @@ fn the_failed_certificate_calibration_applies_only_to_a_tree_against_itself() {
             .expect("an unsettled answer has a frontier");
         assert_eq!(
             twin_model.probability,
-            AnswerModel::FITTED.confidence(&frontier, twin_model.node_pairs_visited, 1.0),
+            AnswerModel::FITTED.confidence(
+                &frontier,
+                twin_model.node_pairs_visited,
+                1.0,
+                2 * tree.nodes().len() as u64
+            ),
             "at {x}"
         );
         let (self_on, self_off) = (

@@ -1,13 +1,19 @@
 //! The accuracy report's held-out pairs of different meshes (`examples/support/mesh_pairs.rs`,
 //! `accuracy_vs_time --pairs`): the generated shapes are valid closed meshes (so the
 //! interpenetration certificate is exact on them), and each pair is sized as its name says, the
-//! smaller mesh first.
+//! smaller mesh first; the CAD-like parts (`accuracy_vs_time --cad`) are closed and made of
+//! the parts their names say (apart from each other, but for the walls of the box, which meet
+//! along its edges).
 mod common;
 #[path = "../examples/support/mesh_pairs.rs"]
 mod mesh_pairs;
 
 use glam::Vec3;
-use mesh_pairs::{held_out_pairs, pipe_bundle, spiky_sphere, thin_walled_box};
+use mesh_pairs::{
+    cad_parts, held_out_pairs, layered_sheets, pipe_bundle, slotted_plate, spiky_sphere,
+    thin_walled_box,
+};
+use stochastic_collision::bvh::CollisionMesh;
 use stochastic_collision::mesh::TriMesh;
 
 fn diagonal(mesh: &TriMesh) -> f32 {
@@ -73,6 +79,41 @@ fn held_out_pairs_are_sized_as_named() {
             (ratio - named).abs() < 1e-3 * named,
             "{}: the second is {ratio}x the first",
             pair.name
+        );
+    }
+}
+
+#[test]
+fn cad_parts_are_closed_and_made_of_separate_parts() {
+    let plate = slotted_plate(12, 1.0, 0.04);
+    assert!(plate.is_closed());
+    // 12 bars side by side with slots between them: the plate spans its width.
+    let one_bar = slotted_plate(1, 1.0, 0.04).triangle_count();
+    assert_eq!(plate.triangle_count(), 12 * one_bar);
+    let sheets = layered_sheets(6, 1.0, 0.02, 0.05);
+    assert!(sheets.is_closed());
+    // Six sheets, each bent upwards by a tenth of its half-width at its edges, stacked with
+    // gaps: the stack's height is 5 gaps and 6 thicknesses plus the bend.
+    let ys: Vec<f32> = sheets.positions().iter().map(|p| p.y).collect();
+    let height = ys.iter().cloned().fold(f32::NEG_INFINITY, f32::max)
+        - ys.iter().cloned().fold(f32::INFINITY, f32::min);
+    assert!(
+        (height - (6.0 * 0.02 + 5.0 * 0.05 + 0.1)).abs() < 0.01,
+        "{height}"
+    );
+    let parts = cad_parts();
+    assert_eq!(parts.len(), 4);
+    for (name, part) in parts {
+        assert!(part.is_closed(), "{name}");
+        if name == "thin-walled box" {
+            continue; // its plates meet along the box's edges, by construction
+        }
+        // The parts do not touch each other: the mesh does not intersect itself.
+        let mesh = CollisionMesh::new(part);
+        let mut ws = stochastic_collision::bvh::QueryWorkspace::new();
+        assert!(
+            !stochastic_collision::bvh::self_intersects(&mesh, &mut ws),
+            "{name} intersects itself"
         );
     }
 }

@@ -83,6 +83,54 @@ pub fn thin_walled_box(half: f32, wall: f32) -> TriMesh {
     TriMesh::merged(&parts).expect("few vertices")
 }
 
+/// A plate cut by parallel slots: `bars` closed thin bars side by side with gaps between them
+/// (CAD-like: a perforated sheet).
+pub fn slotted_plate(bars: u32, half: f32, thickness: f32) -> TriMesh {
+    let pitch = 2.0 * half / bars as f32;
+    let parts: Vec<TriMesh> = (0..bars)
+        .map(|i| {
+            let x = -half + pitch * (i as f32 + 0.5);
+            generate::cuboid(Vec3::new(0.3 * pitch, thickness / 2.0, half), 4)
+                .translated(Vec3::new(x, 0.0, 0.0))
+                .expect("finite offset")
+        })
+        .collect();
+    TriMesh::merged(&parts).expect("few vertices")
+}
+
+/// `layers` thin closed sheets stacked with gaps between them, each slightly bent (CAD-like:
+/// layered body panels).
+pub fn layered_sheets(layers: u32, half: f32, thickness: f32, gap: f32) -> TriMesh {
+    let parts: Vec<TriMesh> = (0..layers)
+        .map(|k| {
+            let sheet = generate::cuboid(Vec3::new(half, thickness / 2.0, half), 12);
+            let bend = 0.1 * half;
+            let positions = sheet
+                .positions()
+                .iter()
+                .map(|&p| {
+                    let y = p.y + k as f32 * (thickness + gap) + bend * (p.x / half).powi(2);
+                    Vec3::new(p.x, y, p.z)
+                })
+                .collect();
+            TriMesh::new(positions, sheet.triangles().to_vec()).expect("the cuboid's triangles")
+        })
+        .collect();
+    TriMesh::merged(&parts).expect("few vertices")
+}
+
+/// Generated CAD-like parts, each for a benchmark of the part against itself as in the
+/// papers (which used a car body, pipes and a door lock): a pipe bundle, a box of thin walls, a
+/// slotted plate and layered sheets.
+pub fn cad_parts() -> Vec<(String, TriMesh)> {
+    vec![
+        ("pipe bundle".into(), pipe_bundle(4, 0.1, 1.5)),
+        ("thin-walled box".into(), thin_walled_box(1.0, 0.02)),
+        ("slotted plate".into(), slotted_plate(12, 1.0, 0.04)),
+        ("layered sheets".into(), layered_sheets(6, 1.0, 0.02, 0.05)),
+    ]
+}
+
 /// The held-out pairs; a shared mesh that cannot be read skips its pairs with a note.
 pub fn held_out_pairs(shared_dir: &Path) -> Vec<MeshPair> {
     let load = |name: &str| TriMesh::from_obj(shared_dir.join(format!("{name}.obj")));

@@ -10,7 +10,7 @@
 use super::traverse::{CertificateHint, Frontier};
 
 /// Number of features (the bias included).
-pub const ANSWER_FEATURES: usize = 9;
+pub const ANSWER_FEATURES: usize = 10;
 
 /// A logistic model of how often an unsettled answer with given [`Frontier`] features truly
 /// collides: `confidence = 1 / (1 + exp(−w·x))` over [`AnswerModel::features`].
@@ -31,30 +31,37 @@ fn logit(p: f64) -> f64 {
 
 impl AnswerModel {
     /// The model this crate's traversal uses, fitted by `cargo run --release --example
-    /// fit_answer_model` on its named training pairs and seeds (`TRAINING_PAIRS`,
+    /// fit_answer_model` on its named training pairs and seeds (`training_pairs`,
     /// `TRAINING_SEEDS` there); the `accuracy_vs_time` report evaluates it on other meshes,
     /// pairs and seeds.
     /// Stored output: `docs/adb/answer_model/output.txt`.
     pub const FITTED: AnswerModel = AnswerModel {
         weights: [
-            0.42315898449949346,
-            0.1402124384298594,
-            -0.13955049012472875,
-            0.6627333046581081,
-            -0.1781070908284062,
-            -1.377610037981227,
-            1.3776100379504848,
-            -0.25096727771459976,
-            0.3592655485123781,
+            -2.055204225217373,
+            0.33262914990378883,
+            -0.21919606978347564,
+            0.34813973301452944,
+            0.6313384177342859,
+            -1.3819880758650922,
+            1.381988075833362,
+            -0.3214104089758075,
+            0.4127372881744772,
+            0.29395375009273056,
         ],
     };
 
     /// The features of an unsettled answer: a bias; the frontier's raw confidence and its
     /// highest pair probability as log-odds; the log of its pair count; its mean relative
     /// depth; whether the certificate found the pose probably apart, or undecided; the log of
-    /// the node pairs visited; and the absolute log-ratio of the two trees' sizes (their root
-    /// boxes' diagonals).
-    pub fn features(frontier: &Frontier, visited: u64, size_ratio: f64) -> [f64; ANSWER_FEATURES] {
+    /// the node pairs visited; the absolute log-ratio of the two trees' sizes (their root
+    /// boxes' diagonals); and the log of the two trees' node count together (how much there is
+    /// to search: the same work covers more of a small tree).
+    pub fn features(
+        frontier: &Frontier,
+        visited: u64,
+        size_ratio: f64,
+        tree_nodes: u64,
+    ) -> [f64; ANSWER_FEATURES] {
         [
             1.0,
             logit(frontier.raw_confidence),
@@ -65,6 +72,7 @@ impl AnswerModel {
             f64::from(u8::from(frontier.certificate == CertificateHint::Undecided)),
             (visited.max(1) as f64).ln(),
             size_ratio.max(f64::MIN_POSITIVE).ln().abs(),
+            (tree_nodes.max(1) as f64).ln(),
         ]
     }
 
@@ -75,8 +83,14 @@ impl AnswerModel {
     }
 
     /// The model's confidence for an unsettled answer.
-    pub fn confidence(&self, frontier: &Frontier, visited: u64, size_ratio: f64) -> f64 {
-        self.confidence_of(&Self::features(frontier, visited, size_ratio))
+    pub fn confidence(
+        &self,
+        frontier: &Frontier,
+        visited: u64,
+        size_ratio: f64,
+        tree_nodes: u64,
+    ) -> f64 {
+        self.confidence_of(&Self::features(frontier, visited, size_ratio, tree_nodes))
     }
 
     /// Fits the model to `samples` (features, whether the pose truly collides) by Newton's
@@ -157,7 +171,7 @@ mod tests {
     /// Samples drawn from a known logistic model are fitted back to close to its weights.
     #[test]
     fn fit_recovers_a_known_model() {
-        let truth = [0.5, 1.5, -0.7, 0.3, 0.0, -1.0, 0.4, -0.2, 0.6];
+        let truth = [0.5, 1.5, -0.7, 0.3, 0.0, -1.0, 0.4, -0.2, 0.6, -0.4];
         let model = AnswerModel { weights: truth };
         let mut state = 0x2545_F491_4F6C_DD1Du64;
         let mut next = || {

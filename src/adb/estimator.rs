@@ -1,7 +1,7 @@
 //! Pluggable estimators of the probability that two nodes contain intersecting triangles.
 use super::calibration::{Calibration, DEPTH_BUCKETS};
 use super::probability::{
-    DEFAULT_X_MAX, ModelBox, cell_counts, depth_lower_bound, overlap_volume_of,
+    DEFAULT_X_MAX, ModelBox, cell_counts_of_grids, depth_lower_bound, overlap_volume_of,
 };
 use super::tables::collision_probability_tabled;
 use super::tree::{AdbNode, AdbTree};
@@ -107,14 +107,11 @@ pub fn eq9_probability(pair: &NodePair<'_>, lb: f64, x_max: u32) -> f64 {
     let (a, b) = (pair.a, pair.b);
     let (box_a, box_b) = (ModelBox::new(a.sides), ModelBox::new(b.sides));
     let v = overlap_volume_of(&box_a, &box_b, pair.center_distance);
-    let cells = pair.cells_a.max(pair.cells_b);
-    let counts = cell_counts(
+    // Each tree's fill density over its own grid (the trees may differ in resolution).
+    let counts = cell_counts_of_grids(
         v,
-        box_a.volume(),
-        box_b.volume(),
-        u32::from(a.well_filled),
-        u32::from(b.well_filled),
-        cells,
+        (box_a.volume(), u32::from(a.well_filled), pair.cells_a),
+        (box_b.volume(), u32::from(b.well_filled), pair.cells_b),
     );
     collision_probability_tabled(counts, lb, x_max)
 }

@@ -78,7 +78,9 @@ pub use fit::FittedEstimator;
 pub use interior::{
     InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, PairLookup, SampleLookup,
 };
-pub use options::{AdbBuildOptions, Budget, Decision, FitOptions, Order};
+pub use options::{
+    AdbBuildOptions, Budget, Decision, FitOptions, Order, TRAINING_MESHES, TRAINING_SEEDS,
+};
 pub use surface_samples::CERTIFY_CHUNK;
 pub use traverse::{
     AdbOutcome, AdbQuery, AdbWorkspace, AnswerConfidence, CertificateHint, ContactWitness,

@@ -331,7 +331,25 @@ pub fn cell_counts(
     well_filled_b: u32,
     cells_per_node: u32,
 ) -> CellCounts {
-    if cells_per_node == 0 || overlap_volume.is_nan() || overlap_volume <= 0.0 {
+    cell_counts_of_grids(
+        overlap_volume,
+        (volume_a, well_filled_a, cells_per_node),
+        (volume_b, well_filled_b, cells_per_node),
+    )
+}
+
+/// [`cell_counts`] for two trees whose nodes have grids of different resolutions: each node
+/// given as `(volume, well-filled cells, cells per node)`. `s` is counted in the finer grid
+/// (`n = max(cells_a, cells_b)` cells per node), and each tree's fill density is its own:
+/// `s_A = min(s, round(well_filled_a / cells_a · s))`, likewise `s_B`. With equal grids it is
+/// [`cell_counts`]. A tree with 0 cells per node gives all zeros.
+pub fn cell_counts_of_grids(
+    overlap_volume: f64,
+    (volume_a, well_filled_a, cells_a): (f64, u32, u32),
+    (volume_b, well_filled_b, cells_b): (f64, u32, u32),
+) -> CellCounts {
+    let cells_per_node = cells_a.max(cells_b);
+    if cells_a == 0 || cells_b == 0 || overlap_volume.is_nan() || overlap_volume <= 0.0 {
         return CellCounts::default();
     }
     // Positive and finite, else 0 (two comparisons: NaN fails both).
@@ -349,8 +367,8 @@ pub fn cell_counts(
     };
     CellCounts {
         s,
-        s_a: scaled_count(well_filled_a, s, n),
-        s_b: scaled_count(well_filled_b, s, n),
+        s_a: scaled_count(well_filled_a, s, cells_a),
+        s_b: scaled_count(well_filled_b, s, cells_b),
     }
 }
 

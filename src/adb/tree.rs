@@ -37,7 +37,8 @@ pub struct AdbNode {
     /// Area-weighted mean normal of the node's triangles (zero when they cancel out).
     pub normal: Vec3,
     /// The slab `{p : slab[0] ≤ normal·p ≤ slab[1]}` that holds every triangle of the node
-    /// (infinite when the normal is zero): with the box, a tighter bounding volume, thin for
+    /// (infinite when the normal is zero, or when the tree was built without slabs:
+    /// [`AdbBuildOptions::normal_slabs`]): with the box, a tighter bounding volume, thin for
     /// nearly flat patches, so near misses between flat patches are culled exactly.
     pub slab: [f32; 2],
 }
@@ -124,7 +125,9 @@ impl AdbTree {
                 }
             })
             .collect();
-        node_slabs(&mesh, &mut nodes);
+        if options.normal_slabs {
+            node_slabs(&mesh, &mut nodes);
+        }
         Self {
             mesh,
             nodes,
