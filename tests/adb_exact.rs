@@ -143,3 +143,15 @@ fn shared_meshes_closed_and_open_agree() {
     }
     agree(&trees[0], &trees[2], 60, 20, &[]);
 }
+
+/// Meshes of very different sizes (the traversal then splits only the larger node): the
+/// answers are still the exact query's, both ways round.
+#[test]
+fn a_small_mesh_against_a_large_one_agrees() {
+    let small = tree(generate::icosphere(0.05, 3));
+    let large = tree(generate::torus(1.0, 0.3, 64, 24));
+    let plate = tree(generate::cuboid(Vec3::new(1.0, 0.02, 1.0), 8));
+    agree(&small, &large, 120, 30, &[]);
+    agree(&large, &small, 120, 31, &[]);
+    agree(&small, &plate, 120, 32, &[]);
+}

@@ -12,7 +12,7 @@
 //! depends on both meshes: against a thin wall, whose map has next to no inside, very little).
 use super::calibration::{ConfidenceCalibration, RAW_BINS, monotone_rates, raw_bin};
 use super::options::{Budget, FitOptions};
-use super::traverse::{AdbQuery, AdbWorkspace, adb_intersects};
+use super::traverse::{AdbQuery, AdbWorkspace, AnswerConfidence, adb_intersects};
 use super::tree::AdbTree;
 use crate::bvh::{QueryWorkspace, intersects};
 use crate::geometry::Pose;
@@ -43,7 +43,12 @@ impl ConfidenceCalibration {
         for p in &poses {
             let mut truth = None;
             for budget in TRAINING_BUDGETS {
-                let query = AdbQuery::with_budget(Budget::NodePairs(budget));
+                // The raw frontier confidence is what the fit maps (the tree has no fit yet,
+                // so `PerMesh` leaves it raw; the answer model would replace it).
+                let query = AdbQuery {
+                    answer_confidence: AnswerConfidence::PerMesh,
+                    ..AdbQuery::with_budget(Budget::NodePairs(budget))
+                };
                 let out = adb_intersects(tree, &Pose::IDENTITY, tree, &p.pose, &query, &mut ws);
                 if out.interpenetration.is_some()
                     || !(out.probability > 0.0 && out.probability < 1.0)

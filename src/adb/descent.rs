@@ -126,9 +126,10 @@ impl Descent {
         DescentEnd::Done
     }
 
-    /// The child pairs of `(x, y)` whose boxes and slabs may overlap (a leaf stands for
-    /// itself), not estimated, in push order: with `ORDERED`, least squarely straddling
-    /// first; without, in index order (so the last child pair is popped first), all ranked 0.
+    /// The child pairs of `(x, y)` whose boxes and slabs may overlap (a leaf, and the smaller
+    /// of two nodes of very different sizes, stands for itself), not estimated, in push order:
+    /// with `ORDERED`, least squarely straddling first; without, in index order (so the last
+    /// child pair is popped first), all ranked 0.
     #[inline]
     fn overlapping_children<const ORDERED: bool>(
         &mut self,
@@ -136,14 +137,24 @@ impl Descent {
         (x, ia): (&BvhNode, u32),
         (y, ib): (&BvhNode, u32),
     ) -> ([Entry; 4], usize) {
-        let children = |n: &BvhNode, i: u32| {
-            if n.is_leaf() {
-                [i, u32::MAX]
-            } else {
+        // Both nodes are split when they are of similar size; where one is more than four times
+        // the other (a small mesh against a large one), only the larger, so the small node is
+        // not split into pairs that each descend the large tree's upper levels again. A leaf
+        // stands for itself.
+        let (size_a, size_b) = (
+            f.a.nodes()[ia as usize].sides[0],
+            f.b.nodes()[ib as usize].sides[0],
+        );
+        let split_a = !x.is_leaf() && (y.is_leaf() || 4.0 * size_a >= size_b);
+        let split_b = !y.is_leaf() && (x.is_leaf() || 4.0 * size_b >= size_a);
+        let children = |n: &BvhNode, i: u32, split: bool| {
+            if split {
                 [n.left(), n.left() + 1]
+            } else {
+                [i, u32::MAX]
             }
         };
-        let (kids_a, kids_b) = (children(x, ia), children(y, ib));
+        let (kids_a, kids_b) = (children(x, ia, split_a), children(y, ib, split_b));
         // Each child of the second node prepared once for its (up to) two box tests.
         let prepare = |ib: u32| (ib != u32::MAX).then(|| prepare_second(f.b, f.frame, ib));
         let prepared_b = [prepare(kids_b[0]), prepare(kids_b[1])];

@@ -15,6 +15,10 @@
 //!   estimates on demand: [`Order`]) with `p_min`, `k_min`, budgets (node pairs or time) and
 //!   optional exact leaves; its [`AdbOutcome`] says whether the meshes collide, with what
 //!   confidence, whether the budget ran out, and where the contact probably is.
+//! - [`AnswerModel`]: the confidence of an answer the traversal did not settle, from its
+//!   [`Frontier`] (what is left, how deep, what the certificate said, how much was seen): a
+//!   logistic model fitted once on many pairs of meshes ([`AnswerModel::FITTED`]), for any
+//!   pair of trees ([`AdbQuery::answer_confidence`]).
 //! - [`InteriorMap`]: the interpenetration certificate that [`AdbQuery::interior_after`]
 //!   tries first: a surface sample of one mesh inside the other and one of the same
 //!   connected surface outside it prove that the surfaces cross.

@@ -78,8 +78,8 @@ pub struct AdbQuery {
 impl Default for AdbQuery {
     /// The papers' `p_min = 0.99`, `k_min = 10`, no budget, with the calibrated estimator
     /// ([`CalibratedEstimator`]), the confidence decision ([`Decision::Confidence`]), exact
-    /// leaves and the straddle order with estimates on demand ([`Order::Straddle`]): what this
-    /// crate recommends.
+    /// leaves, the straddle order with estimates on demand ([`Order::Straddle`]) and the
+    /// answer model for cut answers ([`AnswerConfidence::Model`]): what this crate recommends.
     fn default() -> Self {
         Self {
             p_min: 0.99,
@@ -158,16 +158,19 @@ pub struct AdbOutcome {
     pub collides: bool,
     /// Confidence that they collide, in `[0, 1]`: 1 for an exact hit (or a certificate from an
     /// [exact](super::InteriorMap::is_exact) map), the certificate's confidence for one from
-    /// an approximate map, else `1 − (Π (1 − p))^(1/r)` over the traversal's final frontier
-    /// (the pairs queued, and the leaf pairs and pruned pairs it did not expand), which
-    /// together cover every overlapping leaf pair, `r` = 2 disjoint pairs counting as one
-    /// independent piece; 0 when no pair was left (every overlapping pair was ruled out).
+    /// an approximate map, 0 when no pair was left (every overlapping pair was ruled out),
+    /// else made from the traversal's final [`Frontier`] (the pairs queued, and the leaf pairs
+    /// and pruned pairs it did not expand, which together cover every overlapping leaf pair):
+    /// `1 − (Π (1 − p))^(1/r)` over their probabilities, `r` = 2 disjoint pairs counting as one
+    /// independent piece, for an answer the evidence decided; for the others, as
+    /// [`AdbQuery::answer_confidence`] says (by default the [`AnswerModel`] of that frontier).
     ///
     /// Short of 1 or 0 it is an estimate, not a guarantee. With a calibrated estimator the
     /// pair probabilities are fitted on seeded near-contact poses of each mesh against itself
-    /// (of the pairs given about `p` there, about `p` hold intersecting triangles); how closely
-    /// the reported confidence follows the frequency of collisions on other poses is what the
-    /// `accuracy_vs_time` report's reliability curves show. Under
+    /// (of the pairs given about `p` there, about `p` hold intersecting triangles), and the
+    /// answer model on many pairs of meshes; how closely the reported confidence follows the
+    /// frequency of collisions on other poses is what the `accuracy_vs_time` report's
+    /// reliability curves show. Under
     /// [`Decision::Paper`] the answer follows the papers' rule, which ignores every pair below
     /// `p_min`: "no collision" may then come with a high confidence (the pairs below `p_min`
     /// together make a collision likely), and that disagreement is why that rule misses
@@ -799,12 +802,8 @@ impl Traversal<'_> {
             if frontier.pairs > 0 {
                 f.out.frontier = Some(frontier);
             }
-            // A failed certificate is evidence against the deep overlaps: the confidence as
-            // calibrated for such answers on the mesh itself, for a tree against itself, the
-            // pairs it was fitted on. Between different trees it does not carry over (a thin
-            // wall's map has next to no inside for a ball's samples to land in, so there the
-            // certificate's failure says little), and the frontier's confidence stands.
-            // The tree's own fit applies to a tree against itself after a failed certificate;
+            // A failed certificate is evidence against the deep overlaps. The tree's own fit
+            // (calibrated for such answers on the mesh itself) applies to a tree against itself after a failed certificate;
             // the answer model, where the query has one, to the other answers the evidence did
             // not decide (an answer on evidence keeps the evidence's confidence).
             let per_mesh = (f.certificate != CertificateHint::NotTried && std::ptr::eq(s.a, s.b))
