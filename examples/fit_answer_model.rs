@@ -47,19 +47,12 @@ fn shared_dir() -> PathBuf {
         })
 }
 
-/// The diagonal of a mesh's bounding box.
-fn size(mesh: &TriMesh) -> f32 {
-    let (lo, hi) = mesh.positions().iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
-    (hi - lo).length()
-}
+use mesh_pairs::size;
 
-/// `mesh` scaled so that its box diagonal is `target`.
+/// `mesh` scaled so that its box diagonal is `target` ([`mesh_pairs::sized`]; the scales here
+/// are all finite).
 fn sized(mesh: &TriMesh, target: f32) -> TriMesh {
-    mesh.scaled(Vec3::splat(target / size(mesh)))
-        .expect("a finite scale")
+    mesh_pairs::sized(mesh, target).expect("a finite scale")
 }
 
 /// The training pairs: the meshes the ADB defaults were developed on (the shared bunny,

@@ -18,7 +18,7 @@ pub struct MeshPair {
 }
 
 /// The diagonal of a mesh's bounding box.
-fn size(mesh: &TriMesh) -> f32 {
+pub fn size(mesh: &TriMesh) -> f32 {
     let (lo, hi) = mesh.positions().iter().fold(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
         |(lo, hi), &p| (lo.min(p), hi.max(p)),
@@ -27,7 +27,7 @@ fn size(mesh: &TriMesh) -> f32 {
 }
 
 /// `mesh` scaled uniformly so that its box diagonal is `target`.
-fn sized(mesh: &TriMesh, target: f32) -> Result<TriMesh, MeshError> {
+pub fn sized(mesh: &TriMesh, target: f32) -> Result<TriMesh, MeshError> {
     mesh.scaled(Vec3::splat(target / size(mesh)))
 }
 
