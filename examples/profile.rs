@@ -24,7 +24,9 @@
 //! `contacts`), `events_deferred` (contacts left for a later frame by the response budget),
 //! `events_lost` (written but never read by a reader that runs every other frame), `memory`
 //! (resident MiB after a tenth of the run and at the end, and the growth), and
-//! `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms:
+//! `work` (node pairs, ADB pairs, pairs cut by their budget, answered from the last test,
+//! tested exactly, `confirmed_pairs`: exact pairs past their deadline answered exactly from
+//! memory, cached, tested), `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms:
 //! each frame 8 random pairs whose world boxes overlap, whether worked on in that frame or
 //! not), `agreement_adb` and `agreement_other` (the same for the pairs of ADB fidelity and for
 //! the others), `active_pairs` (pairs worked on per frame, mean) and `transitions` (touching
@@ -326,12 +328,13 @@ fn report(
         mib(rss_end)
     );
     println!(
-        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs, {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs (ADB pairs {agreement_adb:.4} on {adb_samples}, others {agreement_other:.4})",
+        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs ({} more confirmed from memory), {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs (ADB pairs {agreement_adb:.4} on {adb_samples}, others {agreement_other:.4})",
         c.node_pairs,
         c.adb_pairs,
         c.budget_exhausted_pairs,
         c.coherence_pairs,
         c.exact_pairs,
+        c.confirmed_pairs,
         c.cached_pairs,
         agreement
     );
@@ -357,7 +360,7 @@ fn report(
     );
     if let Some(path) = &args.json {
         let json = format!(
-            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"agreement_adb\": {agreement_adb:.5},\n  \"agreement_adb_samples\": {adb_samples},\n  \"agreement_other\": {agreement_other:.5},\n  \"active_pairs\": {:.1},\n  \"transitions\": {:.2},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
+            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"agreement_adb\": {agreement_adb:.5},\n  \"agreement_adb_samples\": {adb_samples},\n  \"agreement_other\": {agreement_other:.5},\n  \"active_pairs\": {:.1},\n  \"transitions\": {:.2},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"confirmed_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
             args.scene.name(),
             records.len(),
             args.options.threads,
@@ -379,6 +382,7 @@ fn report(
             c.budget_exhausted_pairs,
             c.coherence_pairs,
             c.exact_pairs,
+            c.confirmed_pairs,
             c.cached_pairs,
             c.tested_pairs,
             per_ms(c.tested_pairs),

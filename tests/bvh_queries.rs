@@ -10,6 +10,7 @@ use rand::{RngExt, SeedableRng};
 use stochastic_collision::bvh::{
     CollisionMesh, ExactOptions, QueryWorkspace, TrianglePair, closest_points, contains_point,
     intersecting_pairs, intersects, intersects_with, self_intersections, self_intersects,
+    triangle_pair_intersects,
 };
 use stochastic_collision::geometry::{Pose, closest_points_triangle_triangle, triangles_intersect};
 use stochastic_collision::mesh::{TriMesh, generate};
@@ -142,6 +143,51 @@ fn intersects_and_pairs_equal_brute_force_near_contact() {
             poses.len()
         );
     }
+}
+
+#[test]
+fn one_triangle_pair_is_decided_as_the_query_decides_it() {
+    // Near-contact poses placed away from the origin (both poses matter): every crossing pair
+    // the query reports is crossing alone, and pairs it does not report are not; a triangle
+    // the mesh does not have is never crossing.
+    let mut ws = QueryWorkspace::new();
+    let meshes = small_meshes();
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(17);
+    let (mut crossing, mut apart) = (0, 0);
+    for (k, (name_a, a)) in meshes.iter().enumerate() {
+        let (name_b, b) = &meshes[(k + 2) % meshes.len()];
+        let (ca, cb) = (CollisionMesh::new(a.clone()), CollisionMesh::new(b.clone()));
+        for p in near_contact_poses(&ca, &cb, 8, 0.03, 40 + k as u64) {
+            let pose_a = Pose::new(random_direction(&mut rng) * 5.0, random_rotation(&mut rng));
+            let pose_b = pose_a.mul(&p.pose);
+            let mut pairs = Vec::new();
+            intersecting_pairs(&ca, &pose_a, &cb, &pose_b, &mut ws, &mut pairs);
+            let found: BTreeSet<_> = pairs.iter().copied().collect();
+            for i in 0..a.triangle_count() as u32 {
+                for j in (0..b.triangle_count() as u32).step_by(3) {
+                    let t = TrianglePair { a: i, b: j };
+                    let one = triangle_pair_intersects(&ca, &pose_a, &cb, &pose_b, t);
+                    assert_eq!(one, found.contains(&t), "{name_a} vs {name_b}: {t:?}");
+                    crossing += usize::from(one);
+                    apart += usize::from(!one);
+                }
+            }
+            for &t in &found {
+                assert!(triangle_pair_intersects(&ca, &pose_a, &cb, &pose_b, t));
+            }
+            let missing = TrianglePair {
+                a: a.triangle_count() as u32,
+                b: 0,
+            };
+            assert!(!triangle_pair_intersects(
+                &ca, &pose_a, &cb, &pose_b, missing
+            ));
+        }
+    }
+    assert!(
+        crossing > 0 && apart > 0,
+        "{crossing} crossing, {apart} apart"
+    );
 }
 
 #[test]

@@ -35,7 +35,8 @@ pub(crate) use collision_mesh::component_labels;
 pub use distance::{MeshDistance, closest_points};
 pub use solid::contains_point;
 pub use traverse_pair::{
-    ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with, root_boxes_overlap,
+    ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with,
+    root_boxes_overlap, triangle_pair_intersects,
 };
 pub use traverse_self::{
     SelfContact, self_contacts, self_contacts_excluding, self_intersections, self_intersects,

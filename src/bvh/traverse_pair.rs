@@ -99,6 +99,34 @@ pub fn root_boxes_overlap(
             .overlap(&a.bvh().nodes()[0], &b.bvh().nodes()[0])
 }
 
+/// Whether triangle `pair.a` of `a` and triangle `pair.b` of `b` intersect (or touch) at these
+/// poses, decided exactly as [`intersects`] decides it for that pair (the same relative pose
+/// and arithmetic): `true` proves that the meshes collide, in a few hundred nanoseconds. A pair
+/// naming a triangle the mesh does not have, or a pose that is not finite, is `false`.
+pub fn triangle_pair_intersects(
+    a: &CollisionMesh,
+    pose_a: &Pose,
+    b: &CollisionMesh,
+    pose_b: &Pose,
+    pair: TrianglePair,
+) -> bool {
+    let rel = pose_a.inverse_mul(pose_b);
+    let (ma, mb) = (a.mesh(), b.mesh());
+    let (Some(&ta), Some(&tb)) = (
+        ma.triangles().get(pair.a as usize),
+        mb.triangles().get(pair.b as usize),
+    ) else {
+        return false;
+    };
+    if !rel.is_finite() {
+        return false;
+    }
+    let rel64 = rel.to_f64();
+    let tri_a = triangle_f64(ta, ma.positions());
+    let tri_b = tb.map(|i| rel64.transform_point(mb.positions()[i as usize]));
+    triangles_intersect(&tri_a, &tri_b)
+}
+
 /// All intersecting (or touching) triangle pairs of `a` and `b`, appended to `out` in
 /// traversal order; returns how many were appended.
 pub fn intersecting_pairs(

@@ -83,7 +83,8 @@ pub struct CollisionCounters {
     pub budget_exhausted_pairs: u64,
     /// Active pairs not tested under a time budget (not among the most urgent that fit, or
     /// past the deadline), which kept their last answer (an exact pair got one from memory,
-    /// [`Method::Coherence`](super::Method::Coherence)).
+    /// [`Method::Coherence`](super::Method::Coherence), unless it was confirmed:
+    /// `confirmed_pairs`).
     pub coherence_pairs: u64,
     /// Pairs answered by a test (ADB or exact) in the narrow phase.
     pub tested_pairs: u64,
@@ -95,6 +96,10 @@ pub struct CollisionCounters {
     pub cached_pairs: u64,
     /// Pairs tested exactly.
     pub exact_pairs: u64,
+    /// Exact pairs past their deadline answered exactly without a full test: their remembered
+    /// crossing triangle pair still crosses, or their oriented root boxes are apart
+    /// ([`Method::Coherence`](super::Method::Coherence) describes the rest).
+    pub confirmed_pairs: u64,
     /// Pairs tested over a swept collider's motion
     /// ([`ContinuousCollision`](super::ContinuousCollision)).
     pub swept_pairs: u64,

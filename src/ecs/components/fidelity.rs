@@ -15,7 +15,9 @@ use bevy_reflect::prelude::*;
 pub enum Fidelity {
     /// The exact BVH query: a certain answer. Not cut by a work budget; under a time budget,
     /// exact pairs are tested first, and those whose turn comes after the deadline get an
-    /// answer from their memory ([`Method::Coherence`](crate::ecs::Method::Coherence)).
+    /// answer from their memory: exact where their remembered crossing triangle pair still
+    /// crosses or their root boxes are apart, else
+    /// [`Method::Coherence`](crate::ecs::Method::Coherence).
     Exact,
     /// The time-critical ADB traversal with this confidence target, cut by the pair's slice
     /// of the frame budget: the answer carries its probability.

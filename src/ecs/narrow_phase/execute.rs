@@ -83,6 +83,8 @@ pub(crate) struct RunCounts {
     pub exact_pairs: u64,
     pub budget_exhausted: u64,
     pub coherence: u64,
+    /// Exact pairs past their deadline answered exactly by a cheap test of their memory.
+    pub confirmed: u64,
     pub tested: u64,
     pub test_time: Duration,
     pub memory_time: Duration,
@@ -100,6 +102,7 @@ impl RunCounts {
             exact_pairs: self.exact_pairs + o.exact_pairs,
             budget_exhausted: self.budget_exhausted + o.budget_exhausted,
             coherence: self.coherence + o.coherence,
+            confirmed: self.confirmed + o.confirmed,
             tested: self.tested + o.tested,
             test_time: self.test_time + o.test_time,
             memory_time: self.memory_time + o.memory_time,
@@ -173,9 +176,11 @@ struct Scratch<'w> {
     pairs: &'w mut Vec<TrianglePair>,
     ccd: &'w mut CcdWorkspace,
     node_cap: u64,
-    /// Pairs swept, and caught by the sweep only, in this run of jobs.
+    /// Pairs swept, and caught by the sweep only, in this run of jobs; exact pairs past their
+    /// deadline answered exactly from memory.
     swept: u64,
     caught: u64,
+    confirmed: u64,
 }
 
 /// What every run of jobs reads.
@@ -232,6 +237,7 @@ impl Context<'_> {
                 node_cap: u64::MAX,
                 swept: 0,
                 caught: 0,
+                confirmed: 0,
             };
             let is_exact = |j: &Job| j.chosen && j.method == Method::Exact;
             let mut late = false;
@@ -264,6 +270,7 @@ impl Context<'_> {
             }
             counts.swept = s.swept;
             counts.caught = s.caught;
+            counts.confirmed = s.confirmed;
         });
         counts.memory_time = clock
             .now()
@@ -287,6 +294,7 @@ impl Context<'_> {
             let memory = self.pairs.hot[job.pair as usize].memory.as_ref();
             let slot = self.pairs.slot(job.pair);
             let (o, r) = exact_from_memory(job, memory, slot, (ea, eb), self.run);
+            s.confirmed += u64::from(o.method == Method::Exact);
             return (Answer::Computed(o, r), false);
         }
         // A swept pair is tested even past the deadline (with the smallest ADB budget): kept, it

@@ -1,7 +1,8 @@
 //! Answers from memory. A pair worked on but not tested in a run keeps its last answer, one
 //! run older ([`PairTable::keep`](super::super::pairs::PairTable)); only an exact pair that a
-//! deadline left untested gets an answer computed from its memory ([`Method::Coherence`]), as
-//! level geometry must hold whatever the load.
+//! deadline left untested gets an answer computed from its memory, as level geometry must
+//! hold whatever the load: exact where its remembered triangle pair still crosses or its root
+//! boxes are apart, else [`Method::Coherence`].
 use glam::Vec3;
 use smallvec::{SmallVec, smallvec};
 
@@ -10,7 +11,7 @@ use super::super::pairs::{PairSlot, Record};
 use super::super::prepare::ColliderEntry;
 use super::outcome::{Method, PairOutcome};
 use super::plan::Job;
-use crate::bvh::root_boxes_overlap;
+use crate::bvh::{root_boxes_overlap, triangle_pair_intersects};
 
 /// What a pair's last test found (what planning reads of it).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,13 +89,17 @@ pub(crate) fn decayed_probability(
     0.5 + (memory.probability - 0.5) * f64::from((-drift / scale).exp())
 }
 
-/// The answer of an exact pair that a deadline left untested in `run`, from its memory
-/// ([`Method::Coherence`]): a pair that collided keeps colliding, its contact re-measured on
-/// its triangle pair at the current poses (a box contact stays, without its depth); one that
-/// did not, or was never tested, collides when its oriented root boxes overlap, with
-/// probability ½ and a box contact of half the depth (level geometry must not be passed
-/// through); otherwise "not colliding". A memory older than either collider's geometry
-/// counts as none. The memory stays (one run staler).
+/// The answer of an exact pair that a deadline left untested in `run`, from its memory.
+///
+/// Exact where a cheap test decides it at the current poses ([`Method::Exact`], a fresh
+/// memory): a pair that collided and whose remembered triangle pair still crosses collides,
+/// its contact measured on that pair; one whose oriented root boxes are apart does not.
+/// Otherwise [`Method::Coherence`]: a pair that collided keeps colliding with a decayed
+/// probability, its contact re-measured on its triangle pair (a box contact stays, without
+/// its depth); one that did not, or was never tested, collides with probability ½ and a box
+/// contact of half the depth (level geometry must not be passed through). A memory older than
+/// either collider's geometry counts as none; a Coherence answer leaves the memory one run
+/// staler.
 pub(crate) fn exact_from_memory(
     job: &Job,
     memory: Option<&PairMemory>,
@@ -102,47 +107,78 @@ pub(crate) fn exact_from_memory(
     (ea, eb): (&ColliderEntry, &ColliderEntry),
     run: u64,
 ) -> (PairOutcome, Option<Record>) {
+    let ends = (ea.entity, eb.entity);
     let mut out = PairOutcome {
-        a: ea.entity,
-        b: eb.entity,
         method: Method::Coherence,
-        collides: false,
         probability: 0.5,
-        node_pairs: 0,
-        budget_exhausted: false,
-        priority: job.priority,
-        contacts: SmallVec::new(),
-        run,
         computed_run: memory.map_or(run, |m| m.tested_run),
+        ..PairOutcome::exact(
+            ends,
+            Method::Coherence,
+            0,
+            job.priority,
+            SmallVec::new(),
+            run,
+        )
     };
     let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
     // What was found on other geometry (a swapped mesh) says nothing about this one.
     let geometry_since = ea.geometry_since.max(eb.geometry_since);
     let memory = memory.filter(|m| m.tested_run >= geometry_since);
     let (na, nb) = (ma.mesh().triangle_count(), mb.mesh().triangle_count());
+    let remembered = slot
+        .contact
+        .and_then(|c| c.triangles)
+        .filter(|t| (t.a as usize) < na && (t.b as usize) < nb);
+    let tested = |o: PairOutcome| {
+        let r = Record::of_test(job, &o, (ea, eb), run);
+        (o, Some(r))
+    };
     match memory {
+        Some(m)
+            if m.collides
+                && remembered
+                    .is_some_and(|t| triangle_pair_intersects(ma, &ea.pose, mb, &eb.pose, t)) =>
+        {
+            let t = remembered.expect("checked above");
+            let contact = triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t);
+            return tested(PairOutcome::exact(
+                ends,
+                Method::Exact,
+                1,
+                job.priority,
+                smallvec![contact],
+                run,
+            ));
+        }
+        _ if !root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) => {
+            return tested(PairOutcome::exact(
+                ends,
+                Method::Exact,
+                1,
+                job.priority,
+                SmallVec::new(),
+                run,
+            ));
+        }
         Some(m) if m.collides => {
             out.collides = true;
             out.probability = decayed_probability(m, slot.offset, (ea, eb));
-            out.contacts.extend(slot.contact.map(|c| match c.triangles {
-                Some(t) if (t.a as usize) < na && (t.b as usize) < nb => {
-                    triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t)
-                }
-                _ => ContactPoint {
+            out.contacts.extend(slot.contact.map(|c| match remembered {
+                Some(t) => triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, t),
+                None => ContactPoint {
                     depth: 0.0,
                     triangles: None,
                     ..c
                 },
             }));
         }
-        _ if root_boxes_overlap(ma, &ea.pose, mb, &eb.pose) => {
+        _ => {
             out.collides = true;
             let mut c = bounds_contact(ea, eb);
             c.depth *= 0.5;
             out.contacts = smallvec![c];
         }
-        Some(m) => out.probability = decayed_probability(m, slot.offset, (ea, eb)),
-        None => {}
     }
     let record = memory.map(|m| Record {
         memory: PairMemory {
@@ -208,7 +244,8 @@ mod tests {
         // The geometry's identity did not change, but it has fewer triangles than the
         // memory names (a mesh rewritten in place): the contact stays, without triangles.
         let (memory, slot) = remembered();
-        let (ea, eb) = (entry(1, 0, 0.0, 0), entry(2, 0, 1.9, 0));
+        // (Icosahedra 1.6 apart: their root boxes, 0.85 from the centre, overlap.)
+        let (ea, eb) = (entry(1, 0, 0.0, 0), entry(2, 0, 1.6, 0));
         let job = Job::new(0, 0, 1);
         let (o, _) = exact_from_memory(&job, Some(&memory), &slot, (&ea, &eb), 6);
         assert!(o.collides);
@@ -222,5 +259,75 @@ mod tests {
             o.contacts[0].triangles,
             Some(TrianglePair { a: 4000, b: 5000 })
         );
+    }
+
+    /// A memory of an exact test in run 3 that found the spheres at `x = 0` and `x = 1.9`
+    /// colliding at their first crossing triangle pair.
+    fn crossing_memory(ea: &ColliderEntry, eb: &ColliderEntry) -> (PairMemory, PairSlot) {
+        let (ma, mb) = (ea.geometry.mesh(), eb.geometry.mesh());
+        let mut found = Vec::new();
+        let ws = &mut crate::bvh::QueryWorkspace::new();
+        crate::bvh::intersecting_pairs(ma, &ea.pose, mb, &eb.pose, ws, &mut found);
+        let (memory, mut slot) = remembered();
+        slot.contact = Some(triangle_pair_contact(ma, &ea.pose, mb, &eb.pose, found[0]));
+        (memory, slot)
+    }
+
+    #[test]
+    fn a_remembered_triangle_pair_that_still_crosses_is_an_exact_answer() {
+        let (ea, eb) = (entry(1, 2, 0.0, 0), entry(2, 2, 1.9, 0));
+        let (memory, slot) = crossing_memory(&ea, &eb);
+        let job = Job::new(0, 0, 1);
+        let (o, r) = exact_from_memory(&job, Some(&memory), &slot, (&ea, &eb), 6);
+        assert_eq!(
+            (o.method, o.collides, o.probability),
+            (Method::Exact, true, 1.0)
+        );
+        assert_eq!(o.computed_run, 6, "computed at this run's poses");
+        assert_eq!(o.contacts[0].triangles, slot.contact.unwrap().triangles);
+        let r = r.expect("a fresh memory");
+        assert_eq!((r.memory.tested_run, r.memory.stale), (6, 0));
+        assert!(r.memory.settled && r.memory.collides);
+    }
+
+    #[test]
+    fn a_remembered_pair_that_no_longer_crosses_keeps_colliding_from_memory() {
+        // Remembered at 1.9 apart, now 1.95: the spheres still overlap, but the triangle pair
+        // crossed near the rim of the lens and no longer does (checked), so the answer is
+        // not exact: it keeps colliding, with a decayed probability.
+        let (ea, eb) = (entry(1, 2, 0.0, 0), entry(2, 2, 1.9, 0));
+        let (memory, slot) = crossing_memory(&ea, &eb);
+        let t = slot.contact.unwrap().triangles.unwrap();
+        let moved = (1..40)
+            .map(|k| entry(2, 2, 1.9 - 0.05 * k as f32, 0))
+            .find(|e| {
+                let (ma, mb) = (ea.geometry.mesh(), e.geometry.mesh());
+                !triangle_pair_intersects(ma, &ea.pose, mb, &e.pose, t)
+            })
+            .expect("moving closer, the pair stops crossing");
+        let job = Job::new(0, 0, 1);
+        let (o, r) = exact_from_memory(&job, Some(&memory), &slot, (&ea, &moved), 6);
+        assert_eq!((o.method, o.collides), (Method::Coherence, true));
+        assert!(o.probability > 0.5 && o.probability < 1.0);
+        assert_eq!(o.computed_run, 3);
+        assert_eq!(r.expect("kept").memory.stale, 1);
+    }
+
+    #[test]
+    fn root_boxes_apart_are_an_exact_answer_whatever_the_memory_says() {
+        // Remembered colliding, now 3 apart (unit spheres): apart, exactly.
+        let (ea, eb) = (entry(1, 2, 0.0, 0), entry(2, 2, 1.9, 0));
+        let (memory, slot) = crossing_memory(&ea, &eb);
+        let far = entry(2, 2, 3.0, 0);
+        let job = Job::new(0, 0, 1);
+        for m in [Some(&memory), None] {
+            let (o, r) = exact_from_memory(&job, m, &slot, (&ea, &far), 6);
+            assert_eq!(
+                (o.method, o.collides, o.probability),
+                (Method::Exact, false, 0.0)
+            );
+            assert!(o.contacts.is_empty());
+            assert_eq!(r.expect("a fresh memory").memory.tested_run, 6);
+        }
     }
 }

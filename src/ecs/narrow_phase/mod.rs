@@ -231,6 +231,7 @@ pub fn narrow_phase(
     c.exact_pairs += total.exact_pairs;
     c.budget_exhausted_pairs += total.budget_exhausted;
     c.coherence_pairs += total.coherence + kept;
+    c.confirmed_pairs += total.confirmed;
     c.swept_pairs += total.swept;
     c.caught_by_sweep += total.caught;
     c.cached_pairs += cached;

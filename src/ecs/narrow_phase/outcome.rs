@@ -20,10 +20,14 @@ pub enum Method {
     SelfCollision,
     /// Not tested: under a time budget, the deadline passed before an exact pair's turn
     /// (exact pairs are always chosen and tested first, so only an overload of exact pairs
-    /// alone cuts them). The answer comes from the pair's memory: a pair that collided keeps
-    /// colliding, its contact re-measured on its triangle pair at the current poses; one that
-    /// did not, or was never tested, collides when its oriented root boxes overlap (level
-    /// geometry must not be passed through) with probability 0.5 and a box contact.
+    /// alone cuts them). Such a pair is first answered exactly where a cheap test at the
+    /// current poses decides it (then its method is `Exact`): its remembered crossing triangle
+    /// pair still crosses (it collides), or its oriented root boxes are apart (it does not).
+    /// Otherwise the answer comes from the pair's memory (`Coherence`): a pair that collided
+    /// keeps colliding, with a probability that decays with the motion since its test, its
+    /// contact re-measured on its triangle pair at the current poses; one that did not, or
+    /// was never tested, collides (its oriented root boxes overlap; level geometry must not be
+    /// passed through) with probability 0.5 and a box contact.
     /// Other pairs not tested keep their last answer instead: its
     /// [`run`](PairOutcome::run) is earlier, its touching state and contacts stand (the
     /// contacts without depth in this run's contact queue: they stop approach without
