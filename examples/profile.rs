@@ -29,7 +29,8 @@
 //! memory, cached, tested), `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms:
 //! each frame 8 random pairs whose world boxes overlap, whether worked on in that frame or
 //! not), `agreement_adb` and `agreement_other` (the same for the pairs of ADB fidelity and for
-//! the others), `active_pairs` (pairs worked on per frame, mean) and `transitions` (touching
+//! the others), `agreement_adb_by_third` (the ADB pairs' agreement in the first, second and last
+//! third of the frames: a pile falls first and rests last), `active_pairs` (pairs worked on per frame, mean) and `transitions` (touching
 //! states that flipped per frame, mean).
 #[path = "support/cli.rs"]
 mod cli;
@@ -177,7 +178,7 @@ fn main() {
             let adb = matches!(a.fidelity.combine(b.fidelity), Fidelity::Adb { .. })
                 && a.is_rigid()
                 && b.is_rigid();
-            agreement.count(adb, exact == o.collides);
+            agreement.count(adb, exact == o.collides, (frame, args.frames));
         }
         active_pairs += table.active_pairs() as u64;
         transitions += table.transitions() as u64;
@@ -201,13 +202,22 @@ fn main() {
 struct Agreement {
     adb: (u64, u64),
     other: (u64, u64),
+    /// The ADB pairs' samples by third of the run (a pile falls in the first frames and
+    /// rests in the last: what is stale differs).
+    adb_by_third: [(u64, u64); 3],
 }
 
 impl Agreement {
-    fn count(&mut self, adb: bool, agreed: bool) {
+    /// Counts a sample of frame `frame` of `frames`.
+    fn count(&mut self, adb: bool, agreed: bool, (frame, frames): (usize, usize)) {
         let c = if adb { &mut self.adb } else { &mut self.other };
         c.0 += 1;
         c.1 += u64::from(agreed);
+        if adb {
+            let t = &mut self.adb_by_third[(3 * frame / frames.max(1)).min(2)];
+            t.0 += 1;
+            t.1 += u64::from(agreed);
+        }
     }
 
     fn share((sampled, agreed): (u64, u64)) -> f64 {
@@ -274,6 +284,7 @@ fn report(
     let adb_samples = agreement.adb.0;
     let agreement_adb = Agreement::share(agreement.adb);
     let agreement_other = Agreement::share(agreement.other);
+    let thirds = agreement.adb_by_third.map(Agreement::share);
     let agreement = Agreement::share((sampled, agreement.adb.1 + agreement.other.1));
     let frames = records.len().max(1) as f64;
     let mut stages = String::new();
@@ -328,7 +339,7 @@ fn report(
         mib(rss_end)
     );
     println!(
-        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs ({} more confirmed from memory), {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs (ADB pairs {agreement_adb:.4} on {adb_samples}, others {agreement_other:.4})",
+        "work: {} node pairs, {} ADB pairs ({} cut by the budget, {} answered from the last test), {} exact pairs ({} more confirmed from memory), {} cached pairs; agreement with exact {:.4} on {sampled} sampled pairs (ADB pairs {agreement_adb:.4} on {adb_samples}, others {agreement_other:.4}; ADB pairs by third of the run {:.4}, {:.4}, {:.4})",
         c.node_pairs,
         c.adb_pairs,
         c.budget_exhausted_pairs,
@@ -336,7 +347,10 @@ fn report(
         c.exact_pairs,
         c.confirmed_pairs,
         c.cached_pairs,
-        agreement
+        agreement,
+        thirds[0],
+        thirds[1],
+        thirds[2]
     );
     if c.tracker_steps_cut > 0 {
         println!(
@@ -360,7 +374,7 @@ fn report(
     );
     if let Some(path) = &args.json {
         let json = format!(
-            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"agreement_adb\": {agreement_adb:.5},\n  \"agreement_adb_samples\": {adb_samples},\n  \"agreement_other\": {agreement_other:.5},\n  \"active_pairs\": {:.1},\n  \"transitions\": {:.2},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"confirmed_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
+            "{{\n  \"scene\": \"{}\",\n  \"frames\": {},\n  \"threads\": {},\n  \"budget_us\": {},\n  \"node_budget\": {},\n  \"entities\": {},\n  \"seed\": {},\n  \"stages\": {{{stages}\n  }},\n  \"collision_mean_us\": {c_mean:.2},\n  \"collision_p50_us\": {c_p50:.2},\n  \"collision_p99_us\": {c_p99:.2},\n  \"overrun_frames\": {overruns},\n  \"events\": {{\"started\": {}, \"ended\": {}, \"contacts\": {}}},\n  \"events_deferred\": {deferred},\n  \"events_lost\": {lost},\n  \"agreement_with_exact\": {agreement:.5},\n  \"agreement_samples\": {sampled},\n  \"agreement_adb\": {agreement_adb:.5},\n  \"agreement_adb_samples\": {adb_samples},\n  \"agreement_other\": {agreement_other:.5},\n  \"agreement_adb_by_third\": [{:.5}, {:.5}, {:.5}],\n  \"active_pairs\": {:.1},\n  \"transitions\": {:.2},\n  \"memory\": {{\"rss_mib_after_warmup\": {:.1}, \"rss_mib_end\": {:.1}, \"rss_growth_mib\": {growth:.1}}},\n  \"work\": {{\"node_pairs\": {}, \"adb_pairs\": {}, \"budget_exhausted_pairs\": {}, \"deadline_pairs\": {}, \"exact_pairs\": {}, \"confirmed_pairs\": {}, \"cached_pairs\": {}, \"tested_pairs\": {}, \"test_ms\": {test_ms:.3}, \"tests_per_ms\": {:.2}, \"node_pairs_per_ms\": {:.2}}}\n}}\n",
             args.scene.name(),
             records.len(),
             args.options.threads,
@@ -373,6 +387,9 @@ fn report(
             c.started,
             c.ended,
             c.contacts,
+            thirds[0],
+            thirds[1],
+            thirds[2],
             active_pairs as f64 / frames,
             transitions as f64 / frames,
             mib(rss_warm),
