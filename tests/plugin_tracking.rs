@@ -165,3 +165,44 @@ fn tracking_gives_the_same_events_with_one_or_two_threads() {
     assert!(!one.contacts.is_empty());
     assert_eq!(one, run(2));
 }
+
+/// The folded cloth's tracker after `runs` runs under `budget`: its pairs per frame now, and
+/// its own time budget.
+fn tracker_under(budget: FrameBudget, runs: usize) -> (usize, Option<std::time::Duration>) {
+    let mut app = app_with(
+        CollisionConfig {
+            budget,
+            ..Default::default()
+        },
+        1,
+    );
+    let cloth = spawn_folded(&mut app);
+    for _ in 0..runs {
+        app.update();
+    }
+    let state = app.world().resource::<TrackingState>();
+    let tracker = state.tracker(cloth, cloth).expect("tracked");
+    (tracker.pairs_per_frame_now(), tracker.config().time_budget)
+}
+
+#[test]
+fn under_a_time_budget_a_tracker_spends_its_share() {
+    // No time budget: the fidelity's 32 pairs per frame, reproducible.
+    assert_eq!(tracker_under(FrameBudget::Unlimited, 8), (32, None));
+    assert_eq!(tracker_under(FrameBudget::NodePairs(10_000), 8), (32, None));
+    // A generous budget (the only tracker, nothing else to do): the tracker's share is most
+    // of it, and its pairs per frame grow towards what the share allows.
+    let (pairs, own) = tracker_under(FrameBudget::Time(std::time::Duration::from_millis(50)), 8);
+    assert!(pairs > 32, "grew to {pairs}");
+    assert!(
+        own.is_some_and(|t| t > std::time::Duration::from_millis(2)),
+        "{own:?}"
+    );
+    // A budget that cannot hold a step: the share is a sliver, and the pairs shrink.
+    let (pairs, own) = tracker_under(FrameBudget::Time(std::time::Duration::from_micros(1)), 8);
+    assert!(pairs < 32, "shrank to {pairs}");
+    assert!(
+        own.is_some_and(|t| t < std::time::Duration::from_micros(1)),
+        "{own:?}"
+    );
+}

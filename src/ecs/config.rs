@@ -23,9 +23,14 @@ pub enum FrameBudget {
     /// longest (a quarter of the tests) and the most urgent others, sharing node pairs among
     /// the tested ADB pairs by priority. The others keep their last answer, one run older
     /// ([`PairView::age`](super::PairView::age); an exact pair past its deadline gets one
-    /// from memory, [`Method::Coherence`](super::Method::Coherence)), and wait for a test.
-    /// The Tracking stages (tracked pairs, self-collision) share the budget: past the run's
-    /// deadline each tracker does an eighth of its work ([`Tracker::step_self_until`](crate::tracking::Tracker::step_self_until)).
+    /// from memory: exact where its remembered crossing triangle pair still crosses or its
+    /// root boxes are apart, else [`Method::Coherence`](super::Method::Coherence)), and wait
+    /// for a test.
+    /// The Tracking stages (tracked pairs, self-collision) share the budget: each tracker
+    /// spends its share of the time left before the run's deadline as its own
+    /// [`TrackerConfig::time_budget`](crate::tracking::TrackerConfig::time_budget) (its pairs
+    /// per frame adapt to it), and past the deadline each tracker does an eighth of its work
+    /// ([`Tracker::step_self_until`](crate::tracking::Tracker::step_self_until)).
     /// Results then depend on timing: use `NodePairs` for reproducible runs.
     Time(Duration),
     /// A work budget: this many ADB node pairs per run, shared among the ADB pairs by

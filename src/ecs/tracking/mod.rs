@@ -15,6 +15,7 @@ mod feature_pairs;
 mod trackers;
 
 use std::sync::Arc;
+use std::time::Duration;
 
 use bevy_ecs::entity::EntityHashSet;
 use bevy_ecs::prelude::*;
@@ -108,7 +109,9 @@ pub fn self_collision(mut cx: TrackingContext) {
     for (pair, o) in results {
         cx.pairs.answer(pair, o, None, run);
     }
-    let jobs = tracked_jobs(&mut cx, &stochastic);
+    // The tracked pairs of the Tracking stage after this one share the time left too.
+    let later = tracked(&cx.pairs, false).len();
+    let jobs = tracked_jobs(&mut cx, &stochastic, later);
     finish_jobs(&mut cx, jobs, Method::SelfCollision);
     let time = cx.budget.stage_done(Stage::SelfCollision, start);
     cx.diag
@@ -117,11 +120,19 @@ pub fn self_collision(mut cx: TrackingContext) {
 
 /// The tracker jobs of `pairs` (`(pair, collider a, collider b)`; `a == b` for a
 /// self-colliding mesh), run: the surfaces of the colliders involved brought up to date
-/// first, at most `max_self_contacts` contacts each, the trackers' searches cut at the run's
-/// deadline under a time budget.
-fn tracked_jobs(cx: &mut TrackingContext, pairs: &[(u32, u32, u32)]) -> Vec<Job> {
+/// first, at most `max_self_contacts` contacts each. Under a time budget each tracker spends
+/// its share of the time left before the run's tracking deadline (shared with the `later`
+/// trackers of the next stage, [`tracker_share`]) as its own time budget: its pairs per frame
+/// grow where the share allows more and shrink where it allows less
+/// ([`TrackerConfig::time_budget`](crate::tracking::TrackerConfig::time_budget)), and its
+/// search is cut at the deadline.
+fn tracked_jobs(cx: &mut TrackingContext, pairs: &[(u32, u32, u32)], later: usize) -> Vec<Job> {
     let (seed, max, run) = (cx.config.seed, cx.config.max_self_contacts, cx.budget.run());
     let deadline = cx.budget.tracking_deadline(cx.config.budget);
+    let share = deadline.map(|d| {
+        let left = d.saturating_duration_since(cx.budget.now());
+        tracker_share(left, cx.pool.threads(), pairs.len() + later)
+    });
     let mut involved: Vec<u32> = pairs.iter().flat_map(|&(_, a, b)| [a, b]).collect();
     involved.sort_unstable();
     involved.dedup();
@@ -131,10 +142,18 @@ fn tracked_jobs(cx: &mut TrackingContext, pairs: &[(u32, u32, u32)]) -> Vec<Job>
     update_surfaces(state, &entries, &cx.pool);
     let mut jobs: Vec<Job> = pairs
         .iter()
-        .map(|&ends| job(state, colliders, ends, seed))
+        .map(|&ends| job(state, colliders, ends, seed, share))
         .collect();
     run_jobs(&mut jobs, colliders, state, &cx.pool, (max, run), deadline);
     jobs
+}
+
+/// One tracker's share of `left`, the time until the run's tracking deadline, when `trackers`
+/// trackers run on `threads` threads: `left` as long as each has a thread, else the part of
+/// the threads' time that falls to each.
+fn tracker_share(left: Duration, threads: usize, trackers: usize) -> Duration {
+    let threads = threads.max(1);
+    left.mul_f64(threads as f64 / trackers.max(threads) as f64)
 }
 
 /// Records finished jobs: answers in pair order, feature pairs, trackers kept.
@@ -157,7 +176,7 @@ fn finish_jobs(cx: &mut TrackingContext, jobs: Vec<Job>, method: Method) {
 pub fn track_pairs(mut cx: TrackingContext) {
     let start = cx.budget.now();
     let pairs = tracked(&cx.pairs, false);
-    let jobs = tracked_jobs(&mut cx, &pairs);
+    let jobs = tracked_jobs(&mut cx, &pairs, 0);
     finish_jobs(&mut cx, jobs, Method::Tracking);
     let time = cx.budget.stage_done(Stage::Tracking, start);
     cx.diag.record(Stage::Tracking, time, pairs.len() as u64);
@@ -190,4 +209,22 @@ pub fn forget_untracked(pairs: Res<PairTable>, mut state: ResMut<TrackingState>)
     state
         .shared
         .retain(|_, s| used.contains(&(Arc::as_ptr(s) as usize)));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_tracker_gets_its_part_of_the_threads_time() {
+        let ms = Duration::from_millis;
+        // As many trackers as threads or fewer: each has a thread for the whole time.
+        assert_eq!(tracker_share(ms(2), 2, 1), ms(2));
+        assert_eq!(tracker_share(ms(2), 2, 2), ms(2));
+        // More: the threads' time shared out.
+        assert_eq!(tracker_share(ms(2), 2, 8), Duration::from_micros(500));
+        assert_eq!(tracker_share(ms(3), 1, 3), ms(1));
+        // No tracker or no thread counted: as one.
+        assert_eq!(tracker_share(ms(2), 0, 0), ms(2));
+    }
 }

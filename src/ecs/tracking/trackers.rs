@@ -2,7 +2,7 @@
 //! parallel.
 use std::collections::HashMap;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use bevy_ecs::entity::EntityHashMap;
 use bevy_ecs::prelude::*;
@@ -171,12 +171,14 @@ pub(super) struct Job {
 
 /// The job of pair slot `pair` between colliders `a` and `b` (the same for a self-colliding
 /// mesh): the pair's tracker, taken out of `state` or made with the pair's fidelity (pairs
-/// per frame) and seed. Their surfaces must be up to date.
+/// per frame) and seed, with `time_budget` as its own (`None`: the fixed pairs per frame).
+/// Their surfaces must be up to date.
 pub(super) fn job(
     state: &mut TrackingState,
     colliders: &ColliderTable,
     (pair, a, b): (u32, u32, u32),
     seed: u64,
+    time_budget: Option<Duration>,
 ) -> Job {
     let (ea, eb) = (colliders.entry(a), colliders.entry(b));
     let key = (ea.entity, eb.entity);
@@ -194,9 +196,10 @@ pub(super) fn job(
             sa, sb, n, seed, ea.entity, eb.entity, continuous,
         ))
     });
-    if tracker.config().continuous != continuous {
+    if tracker.config().continuous != continuous || tracker.config().time_budget != time_budget {
         let config = TrackerConfig {
             continuous,
+            time_budget,
             ..tracker.config().clone()
         };
         tracker.set_config(config);
