@@ -25,13 +25,6 @@ const SPEED: f32 = 200.0;
 /// crosses the wall in the next step (to x = 1.125).
 const START: f32 = -5.125;
 
-#[derive(Resource, Default)]
-struct Starts(Vec<CollisionStarted>);
-
-fn record(mut starts: ResMut<Starts>, mut reader: MessageReader<CollisionStarted>) {
-    starts.0.extend(reader.read().copied());
-}
-
 /// A thin wall in the x = 0 plane and a ball at `x0` flying along +x (moved by the scene
 /// itself, one step per fixed step, or by the impulse response with `response`).
 fn scene(
@@ -52,7 +45,8 @@ fn adb_scene(
     fidelity: Fidelity,
 ) -> (App, Entity) {
     let mut app = game();
-    app.init_resource::<Starts>().add_systems(Last, record);
+    app.init_resource::<Starts>()
+        .add_systems(Last, record_starts);
     if response {
         app.add_plugins(
             ImpulseResponsePlugin::default().with_settings(ImpulseSettings {
@@ -87,12 +81,6 @@ fn adb_scene(
         app.world_mut().entity_mut(ball).insert(c);
     }
     (app, ball)
-}
-
-fn steps(app: &mut App, n: usize) {
-    for _ in 0..n {
-        app.update();
-    }
 }
 
 #[test]

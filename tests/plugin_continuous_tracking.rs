@@ -19,13 +19,6 @@ use stochastic_collision::ecs::DEFAULT_STEP;
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::prelude::*;
 
-#[derive(Resource, Default)]
-struct Starts(Vec<CollisionStarted>);
-
-fn record(mut starts: ResMut<Starts>, mut reader: MessageReader<CollisionStarted>) {
-    starts.0.extend(reader.read().copied());
-}
-
 const TRACKED: Fidelity = Fidelity::Tracking {
     pairs_per_frame: 32,
 };
@@ -47,7 +40,8 @@ fn tilt() -> Quat {
 /// scene, one step per fixed step), both tracked.
 fn needle_scene(continuous: bool) -> (App, Entity, Entity) {
     let mut app = game();
-    app.init_resource::<Starts>().add_systems(Last, record);
+    app.init_resource::<Starts>()
+        .add_systems(Last, record_starts);
     app.add_systems(
         FixedUpdate,
         |mut q: Query<&mut Transform, With<BodyVelocity>>| {
@@ -130,7 +124,8 @@ fn a_needle_shot_through_a_tracked_cloth_is_caught_only_with_continuous_collisio
 
 fn fold_run(continuous: bool) -> (Vec<CollisionStarted>, Entity) {
     let mut app = game();
-    app.init_resource::<Starts>().add_systems(Last, record);
+    app.init_resource::<Starts>()
+        .add_systems(Last, record_starts);
     let flat = generate::cloth_grid(1.0, 1.0, 20, 20);
     let mut cloth = Deformable::new(flat.clone());
     cloth

@@ -24,12 +24,6 @@ fn touching(app: &App, a: Entity, b: Entity) -> bool {
     app.world().get::<TouchingEntities>(a).unwrap().contains(b)
 }
 
-fn steps(app: &mut App, n: usize) {
-    for _ in 0..n {
-        app.update();
-    }
-}
-
 #[test]
 fn scale_is_honoured_uniform_and_not() {
     let mut app = game();

@@ -56,12 +56,6 @@ fn flatness(rotation: Quat) -> f32 {
         .fold(0.0, f32::max)
 }
 
-fn steps(app: &mut App, n: usize) {
-    for _ in 0..n {
-        app.update();
-    }
-}
-
 #[test]
 fn a_cube_landing_on_its_edge_tips_onto_a_face_and_the_transform_follows() {
     let mut app = game();

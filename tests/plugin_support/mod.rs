@@ -29,6 +29,23 @@ pub fn log_events(
     log.errors.extend(errors.read().cloned());
 }
 
+/// Every `CollisionStarted` message as it came (with its method, probability and time of
+/// impact), recorded by [`record_starts`].
+#[derive(Resource, Default)]
+pub struct Starts(pub Vec<CollisionStarted>);
+
+/// Appends every `CollisionStarted` message to [`Starts`].
+pub fn record_starts(mut starts: ResMut<Starts>, mut reader: MessageReader<CollisionStarted>) {
+    starts.0.extend(reader.read().copied());
+}
+
+/// Runs `n` updates of `app`.
+pub fn steps(app: &mut App, n: usize) {
+    for _ in 0..n {
+        app.update();
+    }
+}
+
 /// A headless app: the plugin in `PostUpdate` with `config` and `threads`, the log in `Last`.
 /// Contact messages are on (the tests read contacts from the log).
 pub fn app_with(config: CollisionConfig, threads: usize) -> App {

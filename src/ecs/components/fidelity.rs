@@ -82,6 +82,16 @@ pub struct SelfCollision;
 ///   continuous query ([`ccd::time_of_impact`](crate::ccd::time_of_impact)), and a contact it
 ///   finds carries its time of impact
 ///   ([`ContactPoint::time_of_impact`](crate::ecs::ContactPoint::time_of_impact)).
+/// - **Exact pairs with a [`Deformable`](crate::ecs::Deformable)**: a deformable with it keeps
+///   its mesh in world coordinates as of its last update; in a run where it changed
+///   (vertices or pose), its pairs are tested over the motion from that state to the new one,
+///   each vertex on a straight line, and so are a swept rigid collider's pairs with any
+///   deformable
+///   ([`ccd::deforming_time_of_impact`](crate::ccd::deforming_time_of_impact): the rigid
+///   partner placed at its poses before and after its motion, its vertices on straight lines
+///   between them; a deformable partner without the component where it is now). It costs a
+///   copy of the mesh per run for each continuous deformable that changed, and per swept pair
+///   with a deformable the partners' meshes placed in world coordinates.
 /// - **Tracked pairs and tracked self-collision** ([`Fidelity::Tracking`], rigid or
 ///   [`Deformable`](crate::ecs::Deformable)): the pair's tracker is continuous
 ///   ([`TrackerConfig::continuous`](crate::tracking::TrackerConfig::continuous)) in every run,
@@ -92,9 +102,9 @@ pub struct SelfCollision;
 ///   seen.
 ///
 /// A move is swept as a straight motion whatever caused it: remove the component for a
-/// teleport. A swept pair that a time budget leaves untested in a run (past the deadline) is
-/// not swept in it. Deformable meshes in exact pairs are not swept by the plugin (the core has
-/// [`ccd::deforming_time_of_impact`](crate::ccd::deforming_time_of_impact)).
+/// teleport. A swept pair is tested in its run whatever the time budget (an ADB one past the
+/// deadline with the smallest node budget). A flat deformable's smallest extent is nil, so
+/// `WhenFast` sweeps it whenever it changes.
 #[derive(Component, Reflect, Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[reflect(Component, Clone, Debug, Default, PartialEq)]
 pub enum ContinuousCollision {

@@ -8,7 +8,8 @@ use super::super::contact::ContactPoint;
 use super::super::prepare::ColliderEntry;
 use crate::adb::Budget;
 use crate::ccd::{
-    CcdOptions, CcdWorkspace, ContinuousAdbQuery, TimeOfImpact, adb_time_of_impact, time_of_impact,
+    CcdOptions, CcdWorkspace, ContinuousAdbQuery, TimeOfImpact, adb_time_of_impact,
+    deforming_time_of_impact, time_of_impact,
 };
 
 /// The first contact of two rigid colliders over their motions in `run`, if they meet: at the
@@ -30,6 +31,22 @@ pub(crate) fn swept_contact(
         ws,
     )
     .ok()??;
+    Some(impact_contact(&hit))
+}
+
+/// [`swept_contact`] where a collider is deformable: both meshes in world coordinates at the
+/// start and end of their motions in `run` ([`ColliderEntry::world_states`]), each vertex on a
+/// straight line between them.
+pub(crate) fn swept_deforming_contact(
+    a: &ColliderEntry,
+    b: &ColliderEntry,
+    run: u64,
+    ws: &mut CcdWorkspace,
+) -> Option<ContactPoint> {
+    let (a0, a1) = a.world_states(run);
+    let (b0, b1) = b.world_states(run);
+    let hit =
+        deforming_time_of_impact((&a0, &a1), (&b0, &b1), &CcdOptions::default(), ws).ok()??;
     Some(impact_contact(&hit))
 }
 

@@ -13,7 +13,7 @@ use super::super::contact::{
 };
 use super::super::pairs::{PairTable, Record};
 use super::super::prepare::{ColliderEntry, ColliderTable};
-use super::continuous::{swept_adb_contact, swept_contact};
+use super::continuous::{swept_adb_contact, swept_contact, swept_deforming_contact};
 use super::memory::exact_from_memory;
 use super::outcome::{Method, PairOutcome};
 use super::plan::Job;
@@ -308,12 +308,14 @@ impl Context<'_> {
         (Answer::Computed(o, Some(r)), true)
     }
 
-    /// A pair with a collider swept in this run ([`ColliderEntry::is_swept`]), rigid, tested
-    /// exactly or with ADB: if its test found it apart, or it did not touch before, the exact
+    /// A pair with a collider swept in this run ([`ColliderEntry::is_swept`]), tested exactly
+    /// or with ADB: if its test found it apart, or it did not touch before, the exact
     /// continuous query over both motions (for an ADB pair the time-critical one within its
-    /// ADB budget, [`sweep_adb`](Self::sweep_adb)); a contact found during the motion makes it
-    /// collide (probability 1; the contact at the time of impact) or, when the test found a
-    /// contact already, gives that contact its time of impact.
+    /// ADB budget, [`sweep_adb`](Self::sweep_adb); where a collider is deformable, the query
+    /// over both meshes' vertices moving on straight lines in world coordinates,
+    /// [`swept_deforming_contact`]); a contact found during the motion makes it collide
+    /// (probability 1; the contact at the time of impact) or, when the test found a contact
+    /// already, gives that contact its time of impact.
     fn sweep(
         &self,
         job: &Job,
@@ -321,8 +323,7 @@ impl Context<'_> {
         (ea, eb): (&ColliderEntry, &ColliderEntry),
         s: &mut Scratch,
     ) {
-        let swept = ea.is_swept(self.run) || eb.is_swept(self.run);
-        if !swept || !ea.is_rigid() || !eb.is_rigid() {
+        if !ea.is_swept(self.run) && !eb.is_swept(self.run) {
             return;
         }
         if !matches!(o.method, Method::Exact | Method::Adb) {
@@ -337,7 +338,12 @@ impl Context<'_> {
             self.sweep_adb(job, o, (ea, eb), s);
             return;
         }
-        if let Some(hit) = swept_contact(ea, eb, self.run, s.ccd) {
+        let hit = if ea.is_rigid() && eb.is_rigid() {
+            swept_contact(ea, eb, self.run, s.ccd)
+        } else {
+            swept_deforming_contact(ea, eb, self.run, s.ccd)
+        };
+        if let Some(hit) = hit {
             take_swept(o, hit, 1.0, s);
         }
     }

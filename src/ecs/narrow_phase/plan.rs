@@ -28,7 +28,7 @@ pub(crate) struct Job {
     /// `u32::MAX`: never tested).
     pub stale: u32,
     pub priority: f32,
-    /// Both colliders rigid and one swept in this run
+    /// A collider swept in this run
     /// ([`ContinuousCollision`](super::super::ContinuousCollision)): a test put off to a later
     /// run would miss what happened during this run's motion, so it is never put off.
     pub swept: bool,
@@ -103,7 +103,7 @@ pub(crate) fn plan_jobs(
             job.apart = true;
             continue;
         }
-        job.swept = ea.rigid && eb.rigid && (ea.swept_run == run || eb.swept_run == run);
+        job.swept = ea.swept_run == run || eb.swept_run == run;
         if job.method == Method::Tracking {
             continue;
         }

@@ -10,6 +10,7 @@ use smallvec::SmallVec;
 use super::super::components::{ContinuousCollision, Fidelity};
 use super::super::layers::ContactLayers;
 use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
+use super::deformed::DeformedStates;
 use crate::adb::AdbTree;
 use crate::bvh::CollisionMesh;
 use crate::ccd::RigidMotion;
@@ -83,8 +84,12 @@ pub struct ColliderEntry {
     /// Its [`ContinuousCollision`](super::super::ContinuousCollision), if any.
     pub continuous: Option<ContinuousCollision>,
     /// The last run in which it was swept (its world box covers the motion from
-    /// `previous_pose` to `pose`, and its pairs are tested over that motion).
+    /// `previous_pose` to `pose`, or a deformable's from its state before to its state now,
+    /// and its pairs are tested over that motion).
     pub swept_run: u64,
+    /// A deformable collider with continuous collision: its mesh in world coordinates now and
+    /// before its last update.
+    pub(crate) deformed: Option<DeformedStates>,
     /// The run ([`CollisionDiagnostics::frame`](super::super::CollisionDiagnostics::frame))
     /// since which the entity's pose and geometry are unchanged: an answer computed in that
     /// run or later still holds for a rigid pair.
@@ -111,10 +116,12 @@ impl ColliderEntry {
         matches!(self.geometry, Geometry::Rigid(_))
     }
 
-    /// Whether its pairs are tested over its motion in `run`.
+    /// Whether its pairs are tested over its motion in `run` (a rigid collider's from its
+    /// previous pose, a deformable one's from its state before its last update).
     #[inline]
     pub fn is_swept(&self, run: u64) -> bool {
-        self.swept_run == run && self.is_rigid()
+        self.swept_run == run
+            && (self.is_rigid() || self.deformed.as_ref().is_some_and(|d| d.before.is_some()))
     }
 
     /// Its motion in `run`: from its previous pose if it moved in this run, else still.
@@ -152,6 +159,7 @@ impl ColliderEntry {
             end_pose: pose,
             continuous: None,
             swept_run: 0,
+            deformed: None,
             still_since: since,
             geometry_since: since,
             pairs: Default::default(),

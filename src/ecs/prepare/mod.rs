@@ -1,6 +1,7 @@
 //! Prepare stage: poses, refit of deformed meshes, validation, world boxes, kept in the
 //! [`ColliderTable`] from run to run and updated only where the ECS says something changed.
 mod colliders;
+mod deformed;
 mod scaled;
 #[cfg(feature = "transform")]
 mod transforms;
@@ -38,6 +39,7 @@ pub(crate) fn shift(pose: &mut ColliderPose, _: &mut (), _: &Parents, delta: Vec
 pub(crate) fn place(pose: &mut ColliderPose, _: &mut (), _: &Parents, world: Pose) {
     pose.0 = world;
 }
+use deformed::DeformedStates;
 use world_box::tight_world_aabb;
 pub(crate) use world_box::world_aabb;
 
@@ -321,6 +323,11 @@ impl Update<'_, '_> {
         let run = self.run;
         let Some(i) = self.table.slot_of(entity) else {
             let aabb = tight_world_aabb(geometry.mesh().bvh(), &pose).inflated(margin);
+            // A continuous deformable's first state: where its first motion starts.
+            let deformed = match (&geometry, continuous) {
+                (Geometry::Deformable(m), Some(_)) => Some(DeformedStates::updated(None, m, &pose)),
+                _ => None,
+            };
             let i = self.table.insert(ColliderEntry {
                 entity,
                 geometry_id: geometry.id(),
@@ -335,6 +342,7 @@ impl Update<'_, '_> {
                 end_pose: pose,
                 continuous,
                 swept_run: 0,
+                deformed,
                 still_since: run,
                 geometry_since: run,
                 pairs: Default::default(),
@@ -373,10 +381,23 @@ impl Update<'_, '_> {
             e.geometry = geometry;
         }
         e.continuous = continuous;
+        // A continuous deformable keeps its state in world coordinates: the start of its
+        // next motion.
+        match (&e.geometry, continuous) {
+            (Geometry::Deformable(m), Some(_)) if moved => {
+                e.deformed = Some(DeformedStates::updated(e.deformed.take(), m, &e.pose));
+            }
+            (Geometry::Deformable(_), Some(_)) => {}
+            _ => e.deformed = None,
+        }
         if moved || self.full {
             let end = tight_world_aabb(e.geometry.mesh().bvh(), &e.pose);
+            let fraction = self.config.continuous_motion;
             let swept = moved
-                .then(|| swept_box(e, &end, self.config.continuous_motion))
+                .then(|| match (&e.deformed, continuous) {
+                    (Some(d), Some(c)) => d.swept_box(c, fraction),
+                    _ => swept_box(e, &end, fraction),
+                })
                 .flatten();
             e.aabb = match swept {
                 Some(swept) => {
