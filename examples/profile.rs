@@ -6,7 +6,7 @@
 //!     [--frames N] [--entities N] [--threads T] [--budget-us B] [--node-budget N] [--seed S] \
 //!     [--adb-decision confidence|evidence] \
 //!     [--adb-order straddle|depth-first|evidence-first|best-first] [--adb-interior on|off] \
-//!     [--json out.json] [--svg out.svg]
+//!     [--json out.json] [--svg out.svg] [--frames-csv out.csv]
 //! ```
 //!
 //! Without `--budget-us` the scene's own budget applies (2000 µs; 30000 µs for the
@@ -17,6 +17,9 @@
 //! they expand node pairs (`CollisionConfig::adb_order`, default `straddle`), `--adb-interior`
 //! whether they try the interpenetration certificate first (`CollisionConfig::adb_interior`,
 //! default `on`).
+//!
+//! `--frames-csv`: one row per frame (each stage's time in µs, the collision stages' time, the
+//! pairs in the table, the pairs worked on in the frame).
 //!
 //! JSON fields: `scene`, `frames`, `threads`, `budget_us`, `stages` (by name: `mean_us`,
 //! `p50_us`, `p99_us` over the frames the stage ran, `runs`), `collision_p99_us` (Prepare to
@@ -54,6 +57,7 @@ struct Args {
     options: Options,
     json: Option<String>,
     svg: Option<String>,
+    frames_csv: Option<String>,
 }
 
 fn parse() -> Result<Args, String> {
@@ -63,6 +67,7 @@ fn parse() -> Result<Args, String> {
         options: Options::default(),
         json: None,
         svg: None,
+        frames_csv: None,
     };
     let mut budget = None;
     let mut it = std::env::args().skip(1);
@@ -93,6 +98,7 @@ fn parse() -> Result<Args, String> {
             }
             "--json" => args.json = Some(value()?),
             "--svg" => args.svg = Some(value()?),
+            "--frames-csv" => args.frames_csv = Some(value()?),
             "-h" | "--help" => return Err(String::new()),
             other => return Err(format!("unknown argument {other}")),
         }
@@ -108,6 +114,9 @@ fn parse() -> Result<Args, String> {
 struct FrameRecord {
     stages: Vec<Option<f64>>,
     collision_us: f64,
+    /// Pairs in the table and pairs worked on in the frame.
+    pairs: usize,
+    active: usize,
 }
 
 fn main() {
@@ -154,6 +163,8 @@ fn main() {
                 .map(|&s| d.stage(s).last.map(|t| t.as_secs_f64() * 1e6))
                 .collect(),
             collision_us: d.collision_time.as_secs_f64() * 1e6,
+            pairs: world.resource::<PairTable>().len(),
+            active: world.resource::<PairTable>().active_pairs(),
         });
         // Agreement: a few pairs per frame whose world boxes overlap (every such pair has an
         // answer, worked on in this frame or still holding from an earlier one), re-tested
@@ -416,6 +427,35 @@ fn report(
             Err(e) => eprintln!("cannot write {path}: {e}"),
         }
     }
+    if let Some(path) = &args.frames_csv {
+        match std::fs::write(path, frames_csv(records)) {
+            Ok(()) => println!("wrote {path}"),
+            Err(e) => eprintln!("cannot write {path}: {e}"),
+        }
+    }
+}
+
+/// One row per frame: each stage's time (µs, empty when it did not run), the collision
+/// stages' time, the pairs in the table and the pairs worked on.
+fn frames_csv(records: &[FrameRecord]) -> String {
+    let mut out = String::from("frame");
+    for s in Stage::ALL {
+        let _ = write!(out, ",{}_us", s.name());
+    }
+    out.push_str(",collision_us,pairs,active_pairs\n");
+    for (i, r) in records.iter().enumerate() {
+        let _ = write!(out, "{i}");
+        for t in &r.stages {
+            match t {
+                Some(t) => {
+                    let _ = write!(out, ",{t:.1}");
+                }
+                None => out.push(','),
+            }
+        }
+        let _ = writeln!(out, ",{:.1},{},{}", r.collision_us, r.pairs, r.active);
+    }
+    out
 }
 
 /// Per-frame stage times (and the collision total) against the budget.

@@ -33,6 +33,14 @@ run pile-1000-10000frames "$new" --scene pile --entities 1000 --threads 2 --budg
 for t in 1 2; do
   run "pile-work-$t-threads" "$new" --scene pile --entities 1000 --threads "$t" --node-budget 200000 --frames 300 --seed 2
 done
+# The same pair again: thread scaling on this VM varies from run to run.
+for t in 1 2; do
+  run "pile-work-$t-threads-again" "$new" --scene pile --entities 1000 --threads "$t" --node-budget 200000 --frames 300 --seed 2
+done
+# 10 000 bodies: where the time goes frame by frame, and a run twice as long (the pile lands).
+"$new" --scene pile --entities 10000 --threads 2 --budget-us 2000 --frames 300 --seed 2 \
+  --frames-csv "$out/pile-10000-seed2-frames.csv" > "$out/pile-10000-seed2-frames.txt"
+run pile-10000-seed2-600frames "$new" --scene pile --entities 10000 --threads 2 --budget-us 2000 --frames 600 --seed 2
 for scene in cannonball cloth intestine; do
   run "$scene" "$new" --scene "$scene" --threads 2
 done
