@@ -2,7 +2,7 @@
 # Reruns every stored run the README and docs/ quote, writing each output where the docs read it.
 # Needs ../shared/assets/meshes beside the project. Long (about an hour on 2 cores, most of it the
 # plugin's runs and the large tracking meshes); run it on a quiet machine, since timings are
-# stored. Usage: docs/regenerate.sh [adb|performance|ccd|ccd_plugin|tracking|plugin]... (default: all)
+# stored. Usage: docs/regenerate.sh [adb|performance|ccd|ccd_reliability|ccd_plugin|tracking|plugin]... (default: all)
 #
 # Each docs/<topic>.md names the command of each figure; this script is those commands in one place.
 set -euo pipefail
@@ -49,7 +49,18 @@ performance() { # docs/performance.md: the exact query against parry3d
 ccd() { # docs/ccd.md: continuous collision against the discrete query and parry3d
   { echo "\$ cargo bench --bench ccd"; cargo bench --quiet --bench ccd 2>/dev/null; } |
     tee docs/ccd/bench.txt
+  ccd_reliability
   ccd_plugin
+}
+
+ccd_reliability() { # docs/ccd.md: the continuous ADB query's confidence on swept pairs
+  {
+    for args in "--svg docs/ccd/continuous_adb_reliability.svg" "--seed 2" "--seed 3"; do
+      echo "\$ cargo run --release --example continuous_adb_reliability -- $args"
+      # shellcheck disable=SC2086
+      cargo run --release --quiet --example continuous_adb_reliability -- $args 2>/dev/null
+    done
+  } | tee docs/ccd/continuous_adb_reliability.txt
 }
 
 ccd_plugin() { # docs/ccd.md: continuous collision in the plugin (tunnel, cannonball at 10x, needle)

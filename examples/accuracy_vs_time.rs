@@ -68,6 +68,8 @@ mod mesh_pairs;
 mod oracle_descent;
 #[path = "support/progress.rs"]
 mod progress;
+#[path = "support/reliability.rs"]
+mod reliability;
 use oracle_descent::{LeafDepths, oracle_descent_pairs};
 
 /// Offsets from first contact are drawn uniformly in ±spread × size: by default ±15 % (deep
@@ -1714,42 +1716,21 @@ fn plot_reliability(
             .iter()
             .position(|c| c.label == label)
             .expect("config");
-        let mut bins = [(0usize, 0usize, 0.0f64); 10];
+        let mut bins: reliability::Bins = Default::default();
         let mut brier = (0.0, 0usize);
         for name in order {
             for r in &all[name] {
                 let p = r.adb[k].probability;
-                let b = ((p * 10.0) as usize).min(9);
-                bins[b].0 += 1;
-                bins[b].1 += usize::from(r.exact.collides);
-                bins[b].2 += p;
+                reliability::add(&mut bins, p, r.exact.collides);
                 brier.0 += (p - f64::from(u8::from(r.exact.collides))).powi(2);
                 brier.1 += 1;
             }
         }
-        let pts: Vec<(f64, f64)> = bins
-            .iter()
-            .filter(|b| b.0 > 0)
-            .map(|b| (b.2 / b.0 as f64, b.1 as f64 / b.0 as f64))
-            .collect();
-        let line: Vec<String> = bins
-            .iter()
-            .enumerate()
-            .filter(|(_, b)| b.0 > 0)
-            .map(|(j, b)| {
-                format!(
-                    "[{:.1},{:.1}): {:.2} ({})",
-                    j as f64 / 10.0,
-                    (j + 1) as f64 / 10.0,
-                    b.1 as f64 / b.0 as f64,
-                    b.0
-                )
-            })
-            .collect();
+        let pts = reliability::points(&bins);
         println!(
             "  {label}: Brier {:.4}; {}",
             brier.0 / brier.1.max(1) as f64,
-            line.join(", ")
+            reliability::line(&bins)
         );
         if label == PAPER_LABEL {
             continue;
