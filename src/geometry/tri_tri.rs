@@ -7,6 +7,8 @@
 //!
 //! # Algorithm
 //!
+//! * **Boxes apart**: triangles whose bounding boxes are apart along an axis are disjoint (a
+//!   comparison of the given coordinates, exact), before any predicate.
 //! * **Fast path** (both triangles proper and not coplanar): the interval formulation of
 //!   Guigue & Devillers, *Faster triangle-triangle intersection tests* (2003). Three `orient3d` of
 //!   `b`'s corners against `a`'s plane (early out when all strictly on one side), three of `a`'s
@@ -44,6 +46,13 @@ use super::predicates::orient3d as o3;
 /// `false`.
 #[inline]
 pub fn triangles_intersect(a: &[DVec3; 3], b: &[DVec3; 3]) -> bool {
+    // Boxes apart along an axis: disjoint (comparisons of the given coordinates, exact; a NaN
+    // compares false and is left to the test below).
+    let (a_lo, a_hi) = (a[0].min(a[1]).min(a[2]), a[0].max(a[1]).max(a[2]));
+    let (b_lo, b_hi) = (b[0].min(b[1]).min(b[2]), b[0].max(b[1]).max(b[2]));
+    if a_hi.cmplt(b_lo).any() || b_hi.cmplt(a_lo).any() {
+        return false;
+    }
     // The sum of all |coordinates| bounds each of them, and is NaN or infinite when one is
     // (and NaN compares false): one branch on the hot path.
     let sum =
