@@ -26,15 +26,16 @@
 //! Report), `overrun_frames` (collision time above the budget), `events` (`started`, `ended`,
 //! `contacts`), `events_deferred` (contacts left for a later frame by the response budget),
 //! `events_lost` (written but never read by a reader that runs every other frame), `memory`
-//! (resident MiB after a tenth of the run and at the end, and the growth), and
-//! `work` (node pairs, ADB pairs, pairs cut by their budget, answered from the last test,
-//! tested exactly, `confirmed_pairs`: exact pairs past their deadline answered exactly from
-//! memory, cached, tested), `agreement_with_exact` (fraction of sampled pairs whose answer the exact query confirms:
-//! each frame 8 random pairs whose world boxes overlap, whether worked on in that frame or
-//! not), `agreement_adb` and `agreement_other` (the same for the pairs of ADB fidelity and for
-//! the others), `agreement_adb_by_third` (the ADB pairs' agreement in the first, second and last
-//! third of the frames: a pile falls first and rests last), `active_pairs` (pairs worked on per frame, mean) and `transitions` (touching
-//! states that flipped per frame, mean).
+//! (resident MiB after a tenth of the run and at the end, and the growth), `work` (node pairs,
+//! ADB pairs, pairs cut by their budget, answered from the last test, tested exactly,
+//! `confirmed_pairs`: exact pairs past their deadline answered exactly from memory, cached,
+//! tested), `agreement_with_exact` (fraction of sampled pairs whose answer the exact query
+//! confirms: each frame 8 random pairs whose world boxes overlap, whether worked on in that
+//! frame or not), `agreement_adb` and `agreement_other` (the same for the pairs of ADB fidelity
+//! and for the others), `agreement_adb_by_third` (the ADB pairs' agreement in the first,
+//! second and last third of the frames: a pile falls first and rests last), `active_pairs`
+//! (pairs worked on per frame, mean) and `transitions` (touching states that flipped per
+//! frame, mean).
 #[path = "support/cli.rs"]
 mod cli;
 mod support;
