@@ -7,9 +7,8 @@ use smallvec::SmallVec;
 use super::boxes::{box_gap, triangle_box};
 use super::config::SearchMode;
 use super::feature::{Feature, reduce_to_feature};
-use super::surface::Placed;
+use super::surface::{ExcludedPairs, Placed};
 use crate::geometry::{ClosestPoints, closest_points_triangle_triangle};
-use crate::mesh::triangles_within_rings;
 
 /// Where a pair's search ended.
 #[derive(Debug, Clone, Copy)]
@@ -33,14 +32,14 @@ pub(crate) struct Searcher<'a> {
     pub b: Placed<'a>,
     /// One mesh against itself: adjacent triangles are excluded.
     pub self_mode: bool,
+    /// Self mode: the pairs left out (within the exclusion rings); `None` for two meshes.
+    pub excluded_pairs: Option<ExcludedPairs<'a>>,
     pub mode: SearchMode,
     pub max_iterations: u32,
     /// Strict-decrease margin (absolute).
     pub epsilon: f64,
     /// Contact distance: self pairs within it are never treated as sliding.
     pub thickness: f64,
-    /// Self pairs within this many rings are excluded (see [`triangles_within_rings`]).
-    pub exclusion_rings: u32,
     /// A sliding self pair farther than this stops its descent at once (closer, it goes on:
     /// it may be at a tight crease whose two sides touch just beyond the excluded zone).
     pub slide_limit: f64,
@@ -59,14 +58,7 @@ enum Step {
 
 impl Searcher<'_> {
     pub fn excluded(&self, ta: u32, tb: u32) -> bool {
-        self.self_mode
-            && (ta == tb
-                || triangles_within_rings(
-                    self.a.topology(),
-                    self.a.corners(ta),
-                    self.b.corners(tb),
-                    self.exclusion_rings,
-                ))
+        self.self_mode && self.excluded_pairs.is_some_and(|e| e.excludes(ta, tb))
     }
 
     pub fn locate(&self, ta: u32, tb: u32, counters: &mut SearchCounters) -> Located {

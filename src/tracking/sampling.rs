@@ -7,9 +7,9 @@ use rand::rngs::Xoshiro256PlusPlus;
 use super::boxes::{Box64, box_axis_gap, box_gap, triangle_box};
 use super::config::Sampling;
 use super::patch_tree::{COLLAPSED_FRACTION, box_transform, random_leaf_pair};
-use super::surface::{Placed, TrackedSurface};
+use super::surface::{ExcludedPairs, Placed, TrackedSurface};
 use crate::geometry::{PoseF64, closest_points_triangle_triangle};
-use crate::mesh::{RingWalk, VertexList, adjacent, triangles_within_rings};
+use crate::mesh::{RingWalk, VertexList, adjacent};
 use glam::Vec3;
 
 /// Scratch memory of the samplers, reused across frames.
@@ -53,16 +53,16 @@ const CREASE_COS: f32 = -0.5;
 const DESCENT_TRIES: usize = 8;
 
 /// What one frame's [`draw`] is asked for.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct DrawRequest {
+#[derive(Clone, Copy)]
+pub(crate) struct DrawRequest<'a> {
     /// Where new pairs come from.
     pub sampling: Sampling,
     /// How many new pairs to draw.
     pub count: usize,
     /// One mesh against itself.
     pub self_mode: bool,
-    /// Self-collision leaves out pairs within this many rings.
-    pub exclusion_rings: u32,
+    /// Self-collision leaves out these pairs (within the exclusion rings).
+    pub excluded_pairs: Option<ExcludedPairs<'a>>,
     /// Contact distance.
     pub thickness: f32,
     /// Boxes within this of each other may hold a pair worth tracking.
@@ -87,7 +87,7 @@ pub(crate) fn draw(
         sampling,
         count: n,
         self_mode,
-        exclusion_rings,
+        excluded_pairs,
         margin,
         ..
     } = *request;
@@ -198,7 +198,7 @@ pub(crate) fn draw(
                         bvh_a.triangles_of(&bvh_a.nodes()[la as usize]),
                         bvh_b.triangles_of(&bvh_b.nodes()[lb as usize]),
                     );
-                    let exclusion = self_mode.then_some(exclusion_rings);
+                    let exclusion = excluded_pairs.filter(|_| self_mode);
                     if let Some(pair) = best_in_leaves(ts_a, ts_b, a, b, exclusion, rng) {
                         out.push(pair);
                         break;
@@ -217,7 +217,7 @@ fn best_in_leaves(
     ts_b: &[u32],
     a: &Placed,
     b: &Placed,
-    exclusion: Option<u32>,
+    exclusion: Option<ExcludedPairs>,
     rng: &mut Xoshiro256PlusPlus,
 ) -> Option<(u32, u32)> {
     let (oa, ob) = (
@@ -231,10 +231,7 @@ fn best_in_leaves(
         let box_a = triangle_box(&tri_a);
         for j in 0..ts_b.len() {
             let tb = ts_b[(ob + j) % ts_b.len()];
-            if let Some(rings) = exclusion
-                && (ta == tb
-                    || triangles_within_rings(a.topology(), a.corners(ta), b.corners(tb), rings))
-            {
+            if exclusion.is_some_and(|e| e.excludes(ta, tb)) {
                 continue;
             }
             let tri_b = b.triangle(tb);
@@ -266,7 +263,10 @@ fn crease_probes(
     scratch: &mut SamplerScratch,
     out: &mut Vec<(u32, u32)>,
 ) -> usize {
-    let (exclusion_rings, thickness) = (request.exclusion_rings, request.thickness);
+    let thickness = request.thickness;
+    let Some(excluded) = request.excluded_pairs else {
+        return 0;
+    };
     let scan_started = std::time::Instant::now();
     let topo = a.topology();
     let normals = &a.surface.normals;
@@ -325,9 +325,7 @@ fn crease_probes(
                 if !collapsed && n_t.dot(normals[u as usize]) >= CREASE_COS {
                     continue;
                 }
-                if box_axis_gap(box_x, box_y) > h
-                    || triangles_within_rings(topo, a.corners(t), a.corners(u), exclusion_rings)
-                {
+                if box_axis_gap(box_x, box_y) > h || excluded.excludes(t, u) {
                     continue;
                 }
                 if closest_points_triangle_triangle(x, y).distance <= h {

@@ -4,7 +4,7 @@ use glam::{DVec3, Vec3};
 
 use super::patch_tree::PatchTree;
 use crate::geometry::PoseF64;
-use crate::mesh::{MeshError, Topology, TriMesh};
+use crate::mesh::{MeshError, SelfExclusion, Topology, TriMesh, triangles_within_rings};
 
 /// Default largest number of triangles in a patch of the incomplete hierarchy.
 pub const DEFAULT_PATCH_SIZE: u32 = 64;
@@ -32,6 +32,40 @@ pub struct TrackedSurface {
     generation: u64,
     /// The farthest any vertex moved in the last one.
     max_displacement: f32,
+    /// The self-collision exclusion of the first ring count asked for (built on first use by
+    /// [`TrackedSurface::excluded_pairs`]; it holds for any positions).
+    exclusion: std::sync::OnceLock<SelfExclusion>,
+}
+
+/// Which triangle pairs of one surface self-collision leaves out (those within a number of
+/// vertex rings, [`triangles_within_rings`]): one merge of two precomputed lists when the
+/// surface's cached [`SelfExclusion`] has that ring count, else a walk of the topology.
+#[derive(Clone, Copy)]
+pub(crate) enum ExcludedPairs<'a> {
+    Cached(&'a SelfExclusion),
+    Walk {
+        mesh: &'a TriMesh,
+        topology: &'a Topology,
+        rings: u32,
+    },
+}
+
+impl ExcludedPairs<'_> {
+    /// Whether triangles `a` and `b` of the surface are the same or within the rings.
+    #[inline]
+    pub fn excludes(&self, a: u32, b: u32) -> bool {
+        match self {
+            ExcludedPairs::Cached(exclusion) => exclusion.excludes(a, b),
+            ExcludedPairs::Walk {
+                mesh,
+                topology,
+                rings,
+            } => {
+                let t = mesh.triangles();
+                a == b || triangles_within_rings(topology, t[a as usize], t[b as usize], *rings)
+            }
+        }
+    }
 }
 
 impl TrackedSurface {
@@ -83,6 +117,7 @@ impl TrackedSurface {
             update_time: std::time::Duration::ZERO,
             generation: 0,
             max_displacement: 0.0,
+            exclusion: std::sync::OnceLock::new(),
         }
     }
 
@@ -141,6 +176,25 @@ impl TrackedSurface {
     /// The mesh's adjacency.
     pub fn topology(&self) -> &Topology {
         &self.topology
+    }
+
+    /// The pairs of triangles within `rings` vertex rings of each other (self-collision
+    /// leaves them out). The first ring count asked for gets a [`SelfExclusion`] built once
+    /// (`O(triangles)`, about 64 bytes per triangle) and kept: its test is one merge of two
+    /// short lists. Other ring counts walk the topology on every test.
+    pub(crate) fn excluded_pairs(&self, rings: u32) -> ExcludedPairs<'_> {
+        let cached = self
+            .exclusion
+            .get_or_init(|| SelfExclusion::from_topology(&self.mesh, &self.topology, rings));
+        if cached.rings() == rings {
+            ExcludedPairs::Cached(cached)
+        } else {
+            ExcludedPairs::Walk {
+                mesh: &self.mesh,
+                topology: &self.topology,
+                rings,
+            }
+        }
     }
 
     /// Mean edge length of the mesh as built (a natural unit for thickness and tolerances).
@@ -220,5 +274,32 @@ impl Placed<'_> {
     #[inline]
     pub fn topology(&self) -> &Topology {
         &self.surface.topology
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::generate;
+
+    /// The cached exclusion (the first ring count asked for) and the walk (any other) both
+    /// answer as `triangles_within_rings`, a triangle with itself included.
+    #[test]
+    fn excluded_pairs_match_the_ring_walk() {
+        let surface = TrackedSurface::new(generate::torus(1.0, 0.3, 12, 8));
+        let (mesh, topology) = (surface.mesh(), surface.topology());
+        let n = mesh.triangle_count() as u32;
+        for rings in [2, 1, 3, 2] {
+            let excluded = surface.excluded_pairs(rings);
+            assert_eq!(matches!(excluded, ExcludedPairs::Cached(_)), rings == 2);
+            for a in 0..n {
+                for b in 0..n {
+                    let corners = |t: u32| mesh.triangles()[t as usize];
+                    let walk =
+                        a == b || triangles_within_rings(topology, corners(a), corners(b), rings);
+                    assert_eq!(excluded.excludes(a, b), walk, "{rings} rings: {a} {b}");
+                }
+            }
+        }
     }
 }

@@ -460,11 +460,11 @@ impl Tracker {
             a,
             b,
             self_mode,
+            excluded_pairs: self_mode.then(|| a.surface.excluded_pairs(cfg.exclusion_rings)),
             mode: cfg.search,
             max_iterations: cfg.max_iterations,
             epsilon: 1e-9 * size as f64,
             thickness: cfg.thickness.max(0.0) as f64,
-            exclusion_rings: cfg.exclusion_rings,
             slide_limit: SLIDE_LIMIT_EDGES * mean_edge,
         };
         let s = &mut self.scratch;
@@ -496,7 +496,7 @@ impl Tracker {
             sampling: cfg.sampling,
             count: if draw_now { pairs_per_frame } else { 0 },
             self_mode,
-            exclusion_rings: cfg.exclusion_rings,
+            excluded_pairs: searcher.excluded_pairs,
             thickness: cfg.thickness,
             margin,
             previous_pose: self.last_relative_pose,
