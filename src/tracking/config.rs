@@ -29,7 +29,7 @@ pub enum Sampling {
     /// Kimmerle et al.: only inside overlapping patch pairs of the incomplete hierarchy (a
     /// random descent below a candidate pair down to two leaves whose boxes still meet). For
     /// self-collision, a quarter of the samples are uniform (contacts between adjacent
-    /// patches) and a quarter are crease probes around the sharpest folded or collapsed edges.
+    /// patches) and a third are crease probes around the sharpest folded or collapsed edges.
     #[default]
     Hierarchy,
 }
