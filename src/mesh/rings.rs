@@ -15,11 +15,15 @@ pub fn adjacent(a: [u32; 3], b: [u32; 3]) -> bool {
 pub(crate) type VertexList = SmallVec<[u32; 64]>;
 
 /// The vertices within a number of edge steps of some seed vertices, by a breadth-first walk
-/// over [`Topology::vertex_neighbours`] whose buffers are reused from call to call.
+/// over [`Topology::vertex_neighbours`] whose buffers are reused from call to call (a vertex is
+/// marked seen by stamping it with the walk's number: no search of the list found so far).
 #[derive(Debug, Default, Clone)]
 pub(crate) struct RingWalk {
     frontier: VertexList,
     next: VertexList,
+    /// Per vertex, the number of the last walk that reached it.
+    stamps: Vec<u32>,
+    walk: u32,
 }
 
 impl RingWalk {
@@ -34,8 +38,23 @@ impl RingWalk {
     ) {
         out.clear();
         self.frontier.clear();
+        if self.stamps.len() < topology.vertex_count() {
+            self.stamps.resize(topology.vertex_count(), 0);
+        }
+        self.walk = self.walk.wrapping_add(1);
+        if self.walk == 0 {
+            self.stamps.fill(0);
+            self.walk = 1;
+        }
+        let (stamps, walk) = (&mut self.stamps, self.walk);
+        let mut first_visit = |v: u32| {
+            let stamp = &mut stamps[v as usize];
+            let new = *stamp != walk;
+            *stamp = walk;
+            new
+        };
         for &v in seeds {
-            if !out.contains(&v) {
+            if first_visit(v) {
                 out.push(v);
                 self.frontier.push(v);
             }
@@ -44,7 +63,7 @@ impl RingWalk {
             self.next.clear();
             for &u in &self.frontier {
                 for &w in topology.vertex_neighbours(u) {
-                    if !out.contains(&w) {
+                    if first_visit(w) {
                         out.push(w);
                         self.next.push(w);
                     }
@@ -261,6 +280,55 @@ fn sorted_lists_meet(a: &[u32], b: &[u32]) -> bool {
 mod tests {
     use super::*;
     use crate::mesh::generate;
+
+    /// One walk reused over many seeds, ring counts and two meshes of different sizes finds
+    /// what a fresh breadth-first labelling finds (stamps of earlier walks never leak).
+    #[test]
+    fn a_reused_walk_finds_each_ring_anew() {
+        let meshes = [
+            generate::torus(1.0, 0.3, 24, 12),
+            generate::cloth_grid(1.0, 1.0, 5, 5),
+        ];
+        let mut walk = RingWalk::default();
+        let mut out = VertexList::new();
+        for step in 0..400usize {
+            let mesh = &meshes[step % 2];
+            let topo = Topology::new(mesh);
+            let seed = (step * 7919 % mesh.vertex_count()) as u32;
+            let seeds = [seed, (seed + 1) % mesh.vertex_count() as u32, seed];
+            let rings = (step % 4) as u32;
+            walk.collect(&topo, &seeds, rings, &mut out);
+            let mut dist = vec![u32::MAX; mesh.vertex_count()];
+            let mut queue = std::collections::VecDeque::new();
+            for v in seeds {
+                if dist[v as usize] == u32::MAX {
+                    dist[v as usize] = 0;
+                    queue.push_back(v);
+                }
+            }
+            while let Some(v) = queue.pop_front() {
+                for &w in topo.vertex_neighbours(v) {
+                    if dist[w as usize] == u32::MAX {
+                        dist[w as usize] = dist[v as usize] + 1;
+                        queue.push_back(w);
+                    }
+                }
+            }
+            let mut expected: Vec<u32> = (0..mesh.vertex_count() as u32)
+                .filter(|&v| dist[v as usize] <= rings)
+                .collect();
+            let mut found = out.to_vec();
+            found.sort_unstable();
+            expected.sort_unstable();
+            // Every vertex within the rings, once.
+            assert_eq!(found, expected, "step {step}");
+            // Seeds first, then ring by ring.
+            assert!(
+                out.windows(2)
+                    .all(|w| dist[w[0] as usize] <= dist[w[1] as usize])
+            );
+        }
+    }
 
     #[test]
     fn ring_fast_paths_agree_with_the_search() {
