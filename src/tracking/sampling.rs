@@ -17,7 +17,9 @@ use glam::Vec3;
 pub(crate) struct SamplerScratch {
     stack: Vec<(u32, u32)>,
     overlaps: Vec<(u32, u32)>,
-    covered: std::collections::HashSet<(u32, u32)>,
+    /// Patch pairs holding a known contact, sorted (a few dozen, looked up for each of up to
+    /// tens of thousands of overlapping pairs).
+    covered: Vec<(u32, u32)>,
     known_triangles: std::collections::HashSet<u32>,
     near_known: Vec<u32>,
     /// Crease probe candidates: (sharpness key, edge, collapsed rather than folded).
@@ -154,15 +156,19 @@ pub(crate) fn draw(
                 scratch.known_triangles.insert(ta);
                 scratch.known_triangles.insert(tb);
                 let (x, y) = (of_a[ta as usize], of_b[tb as usize]);
-                scratch.covered.insert(if self_mode {
+                scratch.covered.push(if self_mode {
                     (x.min(y), x.max(y))
                 } else {
                     (x, y)
                 });
             }
             if !scratch.covered.is_empty() {
+                scratch.covered.sort_unstable();
+                scratch.covered.dedup();
                 let covered = &scratch.covered;
-                scratch.overlaps.retain(|p| !covered.contains(p));
+                scratch
+                    .overlaps
+                    .retain(|p| covered.binary_search(p).is_err());
             }
             let uniform_n = if self_mode {
                 (n as f64 * UNIFORM_SHARE).round() as usize
