@@ -3,6 +3,7 @@
 //! built-in penalty response pushes contacts apart.
 use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
+use stochastic_collision::ecs::PenaltySettings;
 use stochastic_collision::prelude::*;
 
 use super::Options;
@@ -17,6 +18,8 @@ const DT: f32 = 1.0 / 60.0;
 pub const BALL_INSCRIBED: f32 = 0.49;
 /// Height of the floor's top face.
 pub const FLOOR_TOP: f32 = -0.6;
+/// The penalty response's largest vertex displacement per run in this scene.
+pub const MAX_STEP: f32 = 0.2;
 
 /// Verlet state of a sheet: previous positions and the grid's edges with rest lengths.
 #[derive(Component, Debug, Clone)]
@@ -47,7 +50,14 @@ impl ClothState {
 }
 
 pub fn setup(app: &mut App, options: &Options) {
-    app.add_plugins(PenaltyResponsePlugin::default())
+    // A sheet reaches the ball at about 0.06 units a frame and the floor at 0.09: the
+    // response may move a vertex by more than that in a frame, so a contact can stop it where
+    // it touches (the default, 0.05, lets it sink a little every frame).
+    let penalty = PenaltySettings {
+        max_step: MAX_STEP,
+        ..PenaltySettings::default()
+    };
+    app.add_plugins(PenaltyResponsePlugin::default().with_settings(penalty))
         .add_systems(PostUpdate, step_cloth.before(CollisionSystems::Prepare));
     let world = app.world_mut();
     world.spawn((

@@ -7,6 +7,8 @@
 //!   [`intersects`] (first hit, early exit), [`intersects_with`] (with options and a witness),
 //!   [`intersecting_pairs`] (all intersecting triangle pairs), [`closest_points`] (distance and
 //!   closest points), and [`self_intersections`] of one mesh.
+//! - A point against one mesh: [`contains_point`] (inside a closed mesh) and
+//!   [`closest_surface_point`].
 //! - [`QueryWorkspace`]: the reusable scratch memory that keeps queries allocation-free.
 //!
 //! All queries descend both trees simultaneously; boxes are culled in `f32` with a
@@ -24,6 +26,7 @@ mod collision_mesh;
 mod distance;
 mod refit;
 mod solid;
+mod surface_point;
 pub(crate) mod traverse_pair;
 mod traverse_self;
 mod tree;
@@ -34,6 +37,7 @@ pub use collision_mesh::CollisionMesh;
 pub(crate) use collision_mesh::component_labels;
 pub use distance::{MeshDistance, closest_points};
 pub use solid::contains_point;
+pub use surface_point::{SurfacePoint, closest_surface_point};
 pub use traverse_pair::{
     ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with,
     root_boxes_overlap, triangle_pair_intersects,

@@ -122,8 +122,10 @@ pub struct CollisionConfig {
     /// [`CollisionPairs`](super::CollisionPairs), and responses take them from the
     /// [`ContactQueue`](super::ContactQueue)).
     pub contact_messages: bool,
-    /// Contacts reported per pair with a deformable mesh at most (rigid pairs report one
-    /// contact, see [`CollisionConfig::contact_regions`]).
+    /// Contacts reported per pair with a deformable mesh at most, evenly spread over the
+    /// crossing triangle pairs (rigid pairs report one contact, see
+    /// [`CollisionConfig::contact_regions`]). In an exact pair, a deformable's vertices wholly
+    /// inside a closed partner get as many again at most, a different share of them each run.
     pub max_contacts_per_pair: usize,
     /// The one contact of a rigid pair tested exactly summarises its whole contact region:
     /// the mean of the meeting points of every intersecting triangle pair, their mean normal,

@@ -14,6 +14,7 @@
 //! best estimate. Jobs are planned, then tested, on the task pool, each thread with its own
 //! workspaces and each run of jobs writing its answers in place; they are recorded in the
 //! table in job order, so the outcome is the same for any number of threads.
+mod contained;
 mod continuous;
 mod execute;
 mod memory;
