@@ -16,5 +16,7 @@ fn avian_balls_rest_on_the_deforming_cloth() {
         assert!(b.y > dip && b.y < 0.5, "a ball at {b}, cloth down to {dip}");
         assert!(b.y > RADIUS * 0.25, "sunk into the cloth: {b}");
     }
-    assert!(dip < -0.01, "the balls push the cloth down: {dip}");
+    // About a hundredth of a unit: cloth vertices that get inside a ball push it back up (the
+    // contacts of a deformable's vertices inside a closed partner), so the balls sink less.
+    assert!(dip < -0.005, "the balls push the cloth down: {dip}");
 }
