@@ -281,6 +281,28 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
 
+    /// Edge steps from the nearest of `seeds` to every vertex (`u32::MAX`: unreachable), by a
+    /// plain breadth-first labelling of the whole mesh: the reference for the ring tests.
+    fn edge_steps(topo: &Topology, seeds: &[u32]) -> Vec<u32> {
+        let mut dist = vec![u32::MAX; topo.vertex_count()];
+        let mut queue = std::collections::VecDeque::new();
+        for &v in seeds {
+            if dist[v as usize] == u32::MAX {
+                dist[v as usize] = 0;
+                queue.push_back(v);
+            }
+        }
+        while let Some(v) = queue.pop_front() {
+            for &w in topo.vertex_neighbours(v) {
+                if dist[w as usize] == u32::MAX {
+                    dist[w as usize] = dist[v as usize] + 1;
+                    queue.push_back(w);
+                }
+            }
+        }
+        dist
+    }
+
     /// One walk reused over many seeds, ring counts and two meshes of different sizes finds
     /// what a fresh breadth-first labelling finds (stamps of earlier walks never leak).
     #[test]
@@ -298,22 +320,7 @@ mod tests {
             let seeds = [seed, (seed + 1) % mesh.vertex_count() as u32, seed];
             let rings = (step % 4) as u32;
             walk.collect(&topo, &seeds, rings, &mut out);
-            let mut dist = vec![u32::MAX; mesh.vertex_count()];
-            let mut queue = std::collections::VecDeque::new();
-            for v in seeds {
-                if dist[v as usize] == u32::MAX {
-                    dist[v as usize] = 0;
-                    queue.push_back(v);
-                }
-            }
-            while let Some(v) = queue.pop_front() {
-                for &w in topo.vertex_neighbours(v) {
-                    if dist[w as usize] == u32::MAX {
-                        dist[w as usize] = dist[v as usize] + 1;
-                        queue.push_back(w);
-                    }
-                }
-            }
+            let dist = edge_steps(&topo, &seeds);
             let mut expected: Vec<u32> = (0..mesh.vertex_count() as u32)
                 .filter(|&v| dist[v as usize] <= rings)
                 .collect();
@@ -335,23 +342,10 @@ mod tests {
         let mesh = generate::torus(1.0, 0.3, 24, 12);
         let topo = Topology::new(&mesh);
         let tris = mesh.triangles();
-        // Reference: edge-step distances from `a`'s corners to every vertex (a plain
-        // breadth-first labelling of the whole mesh), then the nearest corner of `b`.
+        // Reference: edge steps from `a`'s corners to every vertex, then the nearest corner
+        // of `b`.
         let slow = |a: [u32; 3], b: [u32; 3], rings: u32| {
-            let mut dist = vec![u32::MAX; mesh.vertex_count()];
-            let mut queue = std::collections::VecDeque::new();
-            for v in a {
-                dist[v as usize] = 0;
-                queue.push_back(v);
-            }
-            while let Some(v) = queue.pop_front() {
-                for &w in topo.vertex_neighbours(v) {
-                    if dist[w as usize] == u32::MAX {
-                        dist[w as usize] = dist[v as usize] + 1;
-                        queue.push_back(w);
-                    }
-                }
-            }
+            let dist = edge_steps(&topo, &a);
             b.iter().map(|&v| dist[v as usize]).min().unwrap() <= rings
         };
         for i in (0..tris.len()).step_by(37) {
