@@ -2,11 +2,18 @@
 //! sank into a floor or a ball has triangles wholly inside it, which no surface crossing
 //! reports, and the response must still push them out.
 
+use std::cell::RefCell;
+
 use glam::Vec3;
 
 use super::super::contact::ContactPoint;
 use crate::bvh::{CollisionMesh, TrianglePair, closest_surface_point, contains_point};
 use crate::geometry::Pose;
+
+thread_local! {
+    /// The inside vertices of the pair being answered (no allocation per call once grown).
+    static INSIDE: RefCell<Vec<(u32, Vec3, u32)>> = const { RefCell::new(Vec::new()) };
+}
 
 /// The vertices of `soft` (at `pose_soft`) inside the closed mesh `solid` (at `pose_solid`),
 /// at most `max` of them evenly spread over the inside ones (every k-th, starting at
@@ -32,74 +39,77 @@ pub(crate) fn contained_vertex_contacts(
     let root = solid.bvh().root_aabb();
     let on_surface = 1e-6 * root.extents().length();
     let positions = soft.mesh().positions();
-    let inside: Vec<(u32, Vec3)> = positions
-        .iter()
-        .enumerate()
-        .filter_map(|(v, &p)| {
+    INSIDE.with_borrow_mut(|inside| {
+        // (vertex, where it is in `solid`'s frame, a triangle at it), reused from call to call.
+        inside.clear();
+        inside.extend(positions.iter().enumerate().filter_map(|(v, &p)| {
             let local = to_solid.transform_point(p);
             let in_box = local.cmpge(root.min).all() && local.cmple(root.max).all();
-            (in_box && contains_point(solid, local)).then_some((v as u32, local))
-        })
-        .collect();
-    if inside.is_empty() {
-        return;
-    }
-    let stride = inside.len().div_ceil(max);
-    let first = (rotation % stride as u64) as usize;
-    let chosen: Vec<(u32, Vec3)> = inside.into_iter().skip(first).step_by(stride).collect();
-    // A triangle at each chosen vertex (the response spreads a contact over its triangle's
-    // corners by the contact point's barycentric weights: at a corner, all to that corner).
-    let mut triangle_of = vec![u32::MAX; chosen.len()];
-    for (t, corners) in soft.mesh().triangles().iter().enumerate() {
-        for v in corners {
-            if let Ok(k) = chosen.binary_search_by_key(v, |c| c.0)
-                && triangle_of[k] == u32::MAX
-            {
-                triangle_of[k] = t as u32;
+            (in_box && contains_point(solid, local)).then_some((v as u32, local, u32::MAX))
+        }));
+        if inside.is_empty() {
+            return;
+        }
+        let stride = inside.len().div_ceil(max);
+        let first = (rotation % stride as u64) as usize;
+        let mut k = 0;
+        inside.retain(|_| {
+            k += 1;
+            k > first && (k - 1 - first).is_multiple_of(stride)
+        });
+        // A triangle at each chosen vertex (the response spreads a contact over its
+        // triangle's corners by the contact point's barycentric weights: at a corner, all to
+        // that corner).
+        for (t, corners) in soft.mesh().triangles().iter().enumerate() {
+            for v in corners {
+                if let Ok(k) = inside.binary_search_by_key(v, |c| c.0)
+                    && inside[k].2 == u32::MAX
+                {
+                    inside[k].2 = t as u32;
+                }
             }
         }
-    }
-    out.extend(
-        chosen
-            .iter()
-            .zip(triangle_of)
-            .filter_map(|(&(v, local), t)| {
-                let surface = closest_surface_point(solid, local)?;
-                // On the surface (to rounding): the crossing triangles' contacts hold it, and
-                // the direction to the surface is noise.
-                if surface.distance <= on_surface {
-                    return None;
-                }
-                let vertex = pose_soft.transform_point(positions[v as usize]);
-                let exit = pose_solid.transform_point(surface.point);
-                // Into the solid, from where the vertex leaves it; on the surface, no contact.
-                let inward = (vertex - exit).try_normalize()?;
-                let (normal, triangles) = if soft_first {
-                    (
-                        inward,
-                        TrianglePair {
-                            a: t,
-                            b: surface.triangle,
-                        },
-                    )
-                } else {
-                    (
-                        -inward,
-                        TrianglePair {
-                            a: surface.triangle,
-                            b: t,
-                        },
-                    )
-                };
-                (t != u32::MAX).then_some(ContactPoint {
-                    point: vertex,
-                    normal,
-                    depth: surface.distance,
-                    triangles: Some(triangles),
-                    time_of_impact: None,
-                })
-            }),
-    );
+        out.extend(inside.iter().filter_map(|&(v, local, t)| {
+            // An unreferenced vertex has no triangle to move.
+            if t == u32::MAX {
+                return None;
+            }
+            let surface = closest_surface_point(solid, local)?;
+            // On the surface (to rounding): the crossing triangles' contacts hold it, and
+            // the direction to the surface is noise.
+            if surface.distance <= on_surface {
+                return None;
+            }
+            let vertex = pose_soft.transform_point(positions[v as usize]);
+            let exit = pose_solid.transform_point(surface.point);
+            // Into the solid, from where the vertex leaves it; on the surface, no contact.
+            let inward = (vertex - exit).try_normalize()?;
+            let (normal, triangles) = if soft_first {
+                (
+                    inward,
+                    TrianglePair {
+                        a: t,
+                        b: surface.triangle,
+                    },
+                )
+            } else {
+                (
+                    -inward,
+                    TrianglePair {
+                        a: surface.triangle,
+                        b: t,
+                    },
+                )
+            };
+            Some(ContactPoint {
+                point: vertex,
+                normal,
+                depth: surface.distance,
+                triangles: Some(triangles),
+                time_of_impact: None,
+            })
+        }));
+    });
 }
 
 #[cfg(test)]
