@@ -6,7 +6,8 @@
 //! the mesh against itself at near-contact poses (and at the identical pose) equal an
 //! independent reference, a uniform grid over the triangles' boxes with every candidate pair
 //! tested exactly; the self-intersection query equals the same reference over non-adjacent
-//! pairs; distances are finite; ADB answers are probabilities in [0, 1] (never NaN) and, with
+//! pairs (adjacent: a corner in common once corners at one position are joined); distances
+//! are finite; ADB answers are probabilities in [0, 1] (never NaN) and, with
 //! exact leaves, `p_min = 1` and no budget, equal the exact answers.
 mod common;
 
@@ -96,7 +97,9 @@ fn check_mesh(name: &str, mesh: &TriMesh, poses: usize) {
     self_intersections(&cm, &mut ws, &mut pairs);
     let ours: HashSet<(u32, u32)> = pairs.iter().map(|p| (p.a.min(p.b), p.a.max(p.b))).collect();
     assert_eq!(ours.len(), pairs.len(), "{name}: self pairs reported twice");
-    let reference = grid_pairs(&at_identity, &at_identity, cell, Some(mesh.triangles()));
+    // Adjacent: a corner in common once corners at one position are joined.
+    let joined = common::joined_triangles(mesh);
+    let reference = grid_pairs(&at_identity, &at_identity, cell, Some(&joined));
     assert_eq!(ours, reference, "{name}: self-intersections");
     eprintln!("{name}: {} self-intersecting pairs", ours.len());
 
@@ -282,9 +285,27 @@ fn teapot_with_unwelded_seams() {
         "README: 403 vertices duplicate another's position"
     );
     check_mesh("teapot", &mesh, 3);
-    // Seams are made of distinct vertices, so they are not adjacent: the self-intersection
-    // query reports the triangles that meet along them.
-    let cm = CollisionMesh::new(mesh);
+    // Seams are made of distinct vertices at one position: self-collision joins them, so the
+    // triangles along a seam are adjacent, not intersecting.
+    let cm = CollisionMesh::new(mesh.clone());
+    let welded = cm.welded_triangles().expect("the seams weld");
     let mut pairs = Vec::new();
-    assert!(self_intersections(&cm, &mut QueryWorkspace::new(), &mut pairs) > 0);
+    self_intersections(&cm, &mut QueryWorkspace::new(), &mut pairs);
+    let shares = |a: [u32; 3], b: [u32; 3]| a.iter().any(|v| b.contains(v));
+    assert!(
+        pairs
+            .iter()
+            .all(|p| !shares(welded[p.a as usize], welded[p.b as usize]))
+    );
+    // Without the joining, the seams themselves would be reported: triangles that share a
+    // position but no vertex index, and touch there.
+    let tris = mesh.triangles();
+    let seam_pairs = (0..tris.len())
+        .flat_map(|a| (a + 1..tris.len()).map(move |b| (a, b)))
+        .filter(|&(a, b)| !shares(tris[a], tris[b]) && shares(welded[a], welded[b]))
+        .count();
+    assert!(
+        seam_pairs > 100,
+        "{seam_pairs} triangle pairs meet along the seams"
+    );
 }

@@ -1,7 +1,8 @@
 //! The exact self-collision pass with neighbours excluded first (`self_contacts_excluding`) and
 //! its exclusion (`SelfExclusion`) against brute force: every pair of triangles, the ring walk
-//! of `triangles_within_rings`, and the f64 closest-points distance, on folded, whirled, spiky,
-//! coplanar, far-from-the-origin and defective meshes.
+//! of `triangles_within_rings` (on the mesh with corners at one position joined), and the f64
+//! closest-points distance, on folded, whirled, spiky, coplanar, far-from-the-origin and
+//! defective meshes.
 mod common;
 
 use std::collections::BTreeMap;
@@ -131,9 +132,16 @@ fn mean_edge(mesh: &TriMesh) -> f32 {
     TrackedSurface::new(mesh.clone()).mean_edge_length()
 }
 
-/// Every non-adjacent pair `(a, b)` with `a < b`, with its f64 distance (0 when they cross).
+/// `mesh` with corners at one position joined (`common::joined_triangles`).
+fn joined(mesh: &TriMesh) -> TriMesh {
+    TriMesh::new(mesh.positions().to_vec(), common::joined_triangles(mesh)).unwrap()
+}
+
+/// Every non-adjacent pair `(a, b)` with `a < b` (no common corner once corners at one
+/// position are joined), with its f64 distance (0 when they cross).
 fn all_distances(mesh: &TriMesh) -> Vec<((u32, u32), f64)> {
-    let tris = mesh.triangles();
+    let welded = joined(mesh);
+    let tris = welded.triangles();
     let tri = |t: usize| mesh.triangle(t).map(|p| p.as_dvec3());
     let mut out = Vec::new();
     for a in 0..tris.len() {
@@ -167,15 +175,16 @@ fn excluding_pass_equals_brute_force_for_every_ring_count_and_thickness() {
     let mut ws = QueryWorkspace::new();
     for (name, mesh) in meshes() {
         let distances = all_distances(&mesh);
-        let topology = Topology::new(&mesh);
-        let tris = mesh.triangles();
+        let welded = joined(&mesh);
+        let topology = Topology::new(&welded);
+        let tris = welded.triangles();
         let cm = CollisionMesh::new(mesh.clone());
         let edge = mean_edge(&mesh);
         for thickness in [0.0, 0.1 * edge, 0.5 * edge, 0.25] {
             let mut plain = Vec::new();
             self_contacts(&cm, thickness, &mut ws, &mut plain);
             for rings in 0..=3 {
-                let exclusion = SelfExclusion::from_topology(&mesh, &topology, rings);
+                let exclusion = SelfExclusion::from_topology(&mesh, &Topology::new(&mesh), rings);
                 let mut out = Vec::new();
                 let n =
                     self_contacts_excluding(&cm, thickness, &exclusion, &mut ws, &mut out).unwrap();
@@ -236,8 +245,9 @@ fn exclusion_answers_as_the_ring_walk_on_irregular_meshes() {
         ("spiky", spiky_sphere()),
         ("coplanar", coplanar_sheets()),
     ] {
-        let topology = Topology::new(&mesh);
-        let tris = mesh.triangles();
+        let welded = joined(&mesh);
+        let topology = Topology::new(&welded);
+        let tris = welded.triangles();
         for rings in 0..=4 {
             let exclusion = SelfExclusion::new(&mesh, rings);
             assert_eq!(exclusion.rings(), rings);

@@ -27,6 +27,7 @@ pub struct CollisionMesh {
     bvh: Bvh,
     closed: OnceLock<bool>,
     components: OnceLock<Vec<u32>>,
+    welded: OnceLock<Option<Vec<[u32; 3]>>>,
 }
 
 impl Clone for CollisionMesh {
@@ -40,6 +41,7 @@ impl Clone for CollisionMesh {
             bvh: self.bvh.clone(),
             closed,
             components: self.components.clone(),
+            welded: self.welded.clone(),
         }
     }
 }
@@ -58,6 +60,7 @@ impl CollisionMesh {
             bvh,
             closed: OnceLock::new(),
             components: OnceLock::new(),
+            welded: OnceLock::new(),
         }
     }
 
@@ -88,6 +91,19 @@ impl CollisionMesh {
     /// Only a closed mesh has an inside for [`ExactOptions::solid`](super::ExactOptions::solid).
     pub fn is_closed(&self) -> bool {
         *self.closed.get_or_init(|| self.mesh.is_closed())
+    }
+
+    /// The triangles of the [welded](TriMesh::welded) mesh (corners at one position joined
+    /// under the lowest index), or `None` when welding changes no corner; computed once, from
+    /// the positions at the first call. Self-collision counts triangles with a joined corner in
+    /// common as adjacent: an unwelded seam or pole is not a self-contact.
+    pub fn welded_triangles(&self) -> Option<&[[u32; 3]]> {
+        self.welded
+            .get_or_init(|| match self.mesh.welded() {
+                std::borrow::Cow::Borrowed(_) => None,
+                std::borrow::Cow::Owned(welded) => Some(welded.triangles().to_vec()),
+            })
+            .as_deref()
     }
 
     /// One vertex of every connected component (triangles sharing a vertex index are

@@ -10,9 +10,10 @@ use crate::mesh::{MeshError, SelfExclusion, adjacent};
 /// All pairs of non-adjacent triangles of `mesh` that intersect or touch, appended to `out`
 /// (each pair once, `a < b`); returns how many were appended.
 ///
-/// Triangles sharing a vertex index are adjacent and excluded (they touch by construction).
-/// Triangles that merely have corners at the same position (unwelded seams) are not adjacent,
-/// so an unwelded mesh reports its seams.
+/// Triangles sharing a vertex are adjacent and excluded (they touch by construction), on the
+/// [welded](crate::mesh::TriMesh::welded) mesh: corners at the same position (an unwelded seam
+/// or pole) count as one vertex ([`CollisionMesh::welded_triangles`]), so seams are not
+/// reported.
 ///
 /// # Example
 /// ```
@@ -59,7 +60,7 @@ pub struct SelfContact {
 ///
 /// This is the exact self-collision pass of a surface with a thickness (cloth, tissue): with
 /// `thickness == 0` it finds the same pairs as [`self_intersections`]. Adjacency is by shared
-/// vertex index, as there. A negative or NaN `thickness` counts as 0.
+/// vertex of the welded mesh, as there. A negative or NaN `thickness` counts as 0.
 ///
 /// # Example
 /// ```
@@ -304,11 +305,18 @@ fn descend_self(
     // rejected on these alone.
     ws.triangle_boxes.clear();
     ws.leaf_corners.clear();
+    ws.leaf_welded.clear();
     for &t in order {
         let corners = tris[t as usize];
         let [p, q, r] = corners.map(|v| Vec3A::from(pos[v as usize]));
         ws.triangle_boxes.push([p.min(q).min(r), p.max(q).max(r)]);
         ws.leaf_corners.push(corners);
+    }
+    // Adjacency on the welded mesh: triangles meeting along an unwelded seam touch by
+    // construction too.
+    if let Some(welded) = mesh.welded_triangles() {
+        ws.leaf_welded
+            .extend(order.iter().map(|&t| welded[t as usize]));
     }
     // Rejects only boxes farther apart than `margin` (an `f32` difference above a margin
     // enlarged far beyond its rounding), so the exact tests see every pair they would accept.
@@ -317,7 +325,7 @@ fn descend_self(
     } else {
         0.0
     });
-    let (boxes, corners) = (&ws.triangle_boxes, &ws.leaf_corners);
+    let (boxes, corners, welded) = (&ws.triangle_boxes, &ws.leaf_corners, &ws.leaf_welded);
     // `k`, `m`: slots in the leaf order.
     let mut test = |k: usize, m: usize| -> bool {
         let ([lo_a, hi_a], [lo_b, hi_b]) = (boxes[k], boxes[m]);
@@ -325,7 +333,12 @@ fn descend_self(
             return false;
         }
         let (mut ta, mut tb) = (corners[k], corners[m]);
-        if adjacent(ta, tb) {
+        let touching = if welded.is_empty() {
+            adjacent(ta, tb)
+        } else {
+            adjacent(welded[k], welded[m])
+        };
+        if touching {
             return false;
         }
         // The lower index first, so the test's rounding does not depend on the tree's layout.

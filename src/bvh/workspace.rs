@@ -26,6 +26,8 @@ pub struct QueryWorkspace {
     /// by the self queries.
     pub(crate) triangle_boxes: Vec<[Vec3A; 2]>,
     pub(crate) leaf_corners: Vec<[u32; 3]>,
+    /// The same corners of the welded mesh, when welding joins some (adjacency only).
+    pub(crate) leaf_welded: Vec<[u32; 3]>,
     pub(crate) cache: TransformCache,
     pub(crate) node_pairs_visited: u64,
 }
@@ -67,6 +69,7 @@ impl QueryWorkspace {
             + self.distance_stack.capacity() * size_of::<(u32, u32, f32)>()
             + self.triangle_boxes.capacity() * size_of::<[Vec3A; 2]>()
             + self.leaf_corners.capacity() * size_of::<[u32; 3]>()
+            + self.leaf_welded.capacity() * size_of::<[u32; 3]>()
             + self.cache.points.capacity() * size_of::<DVec3>()
             + self.cache.stamps.capacity() * size_of::<u32>()
     }

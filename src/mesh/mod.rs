@@ -19,6 +19,7 @@ mod random_shapes;
 mod rings;
 mod topology;
 mod tri_mesh;
+mod weld;
 
 pub use error::MeshError;
 pub use mass::{MassModel, MassProperties};
@@ -26,3 +27,6 @@ pub(crate) use rings::{RingWalk, VertexList};
 pub use rings::{SelfExclusion, adjacent, triangles_within_rings};
 pub use topology::{Edge, Topology};
 pub use tri_mesh::TriMesh;
+pub use weld::coincident_representatives;
+#[cfg(test)]
+pub(crate) use weld::triangle_soup;

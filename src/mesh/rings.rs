@@ -130,6 +130,10 @@ pub fn triangles_within_rings(topology: &Topology, a: [u32; 3], b: [u32; 3], rin
 /// triangle as sorted lists (about 12 entries for two rings on a regular mesh: one 64-byte
 /// line per triangle and list, longer lists in a shared array). Build it once per mesh; it holds for any positions of that mesh.
 ///
+/// Rings are counted on the [welded](super::TriMesh::welded) mesh: a mesh whose seams or poles
+/// repeat a vertex (the same position under two indices) does not report the triangles along
+/// them as touching each other.
+///
 /// # Example
 /// ```
 /// use stochastic_collision::mesh::{SelfExclusion, Topology, generate, triangles_within_rings};
@@ -158,12 +162,27 @@ pub struct SelfExclusion {
 
 impl SelfExclusion {
     /// The exclusion of pairs within `rings` rings on `mesh` (0: pairs sharing a vertex).
+    ///
+    /// Rings are counted on the [welded](super::TriMesh::welded) mesh: vertices at one position
+    /// (an unwelded seam or pole) are one vertex, so triangles on either side of a seam are
+    /// neighbours, never a self-contact. On a mesh without such vertices this is
+    /// [`triangles_within_rings`] on its own [`Topology`].
     pub fn new(mesh: &super::TriMesh, rings: u32) -> Self {
-        Self::from_topology(mesh, &Topology::new(mesh), rings)
+        let welded = mesh.welded();
+        Self::build(&welded, &Topology::new(&welded), rings)
     }
 
-    /// The same from the mesh's [`Topology`], when it is already at hand.
+    /// The same, reusing the mesh's [`Topology`] when it is already at hand (it is used only
+    /// when welding changes nothing; otherwise the welded mesh's topology is built).
     pub fn from_topology(mesh: &super::TriMesh, topology: &Topology, rings: u32) -> Self {
+        match mesh.welded() {
+            std::borrow::Cow::Borrowed(mesh) => Self::build(mesh, topology, rings),
+            std::borrow::Cow::Owned(welded) => Self::build(&welded, &Topology::new(&welded), rings),
+        }
+    }
+
+    /// The exclusion on `mesh` as it is (no welding), with its `topology`.
+    fn build(mesh: &super::TriMesh, topology: &Topology, rings: u32) -> Self {
         SelfExclusion {
             rings,
             vertices: mesh.vertex_count(),
@@ -183,7 +202,8 @@ impl SelfExclusion {
     }
 
     /// Whether triangles `a` and `b` (indices into the mesh it was built for) are within the
-    /// excluded rings: the same answer as [`triangles_within_rings`] on their corners.
+    /// excluded rings: the same answer as [`triangles_within_rings`] on their corners in the
+    /// welded mesh.
     ///
     /// # Panics
     /// If `a` or `b` is not a triangle of that mesh.
@@ -333,6 +353,33 @@ mod tests {
             assert!(
                 out.windows(2)
                     .all(|w| dist[w[0] as usize] <= dist[w[1] as usize])
+            );
+        }
+    }
+
+    /// A mesh whose every triangle has its own copies of its corners (a seam along every
+    /// edge) excludes the same pairs as the mesh it was cut from.
+    #[test]
+    fn seams_of_repeated_vertices_are_not_gaps_in_the_rings() {
+        let mesh = generate::torus(1.0, 0.3, 16, 8);
+        let soup = crate::mesh::triangle_soup(&mesh);
+        let soup_topology = Topology::new(&soup);
+        for rings in 0..4 {
+            let (whole, cut) = (
+                SelfExclusion::new(&mesh, rings),
+                SelfExclusion::from_topology(&soup, &soup_topology, rings),
+            );
+            let mut excluded = 0;
+            for a in 0..mesh.triangle_count() as u32 {
+                for b in 0..mesh.triangle_count() as u32 {
+                    assert_eq!(whole.excludes(a, b), cut.excludes(a, b), "{a} {b} {rings}");
+                    excluded += usize::from(cut.excludes(a, b) && a != b);
+                }
+            }
+            // Unwelded, only a triangle with itself would share a vertex.
+            assert!(
+                excluded >= mesh.triangle_count() * 12,
+                "{excluded} at {rings}"
             );
         }
     }

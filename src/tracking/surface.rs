@@ -35,6 +35,9 @@ pub struct TrackedSurface {
     /// The self-collision exclusion of the first ring count asked for (built on first use by
     /// [`TrackedSurface::excluded_pairs`]; it holds for any positions).
     exclusion: std::sync::OnceLock<SelfExclusion>,
+    /// The [welded](TriMesh::welded) mesh and its topology, when welding joins some corners
+    /// (seams, poles): rings for the exclusion are counted there.
+    welded: Option<Box<(TriMesh, Topology)>>,
 }
 
 /// Which triangle pairs of one surface self-collision leaves out (those within a number of
@@ -105,7 +108,15 @@ impl TrackedSurface {
         let mut normals = Vec::new();
         triangle_normals(&mesh, &mut normals);
         patches.update_cones(&normals, mesh.positions());
+        let welded = match mesh.welded() {
+            std::borrow::Cow::Borrowed(_) => None,
+            std::borrow::Cow::Owned(welded) => {
+                let topology = Topology::new(&welded);
+                Some(Box::new((welded, topology)))
+            }
+        };
         TrackedSurface {
+            welded,
             previous: mesh.positions().to_vec(),
             mesh,
             topology,
@@ -178,20 +189,24 @@ impl TrackedSurface {
         &self.topology
     }
 
-    /// The pairs of triangles within `rings` vertex rings of each other (self-collision
-    /// leaves them out). The first ring count asked for gets a [`SelfExclusion`] built once
+    /// The pairs of triangles within `rings` vertex rings of each other on the welded mesh
+    /// (self-collision leaves them out; see [`SelfExclusion::new`]). The first ring count asked for gets a [`SelfExclusion`] built once
     /// (`O(triangles)`, about 64 bytes per triangle) and kept: its test is one merge of two
     /// short lists. Other ring counts walk the topology on every test.
     pub(crate) fn excluded_pairs(&self, rings: u32) -> ExcludedPairs<'_> {
+        let (mesh, topology) = match &self.welded {
+            Some(welded) => (&welded.0, &welded.1),
+            None => (&self.mesh, &self.topology),
+        };
         let cached = self
             .exclusion
-            .get_or_init(|| SelfExclusion::from_topology(&self.mesh, &self.topology, rings));
+            .get_or_init(|| SelfExclusion::from_topology(mesh, topology, rings));
         if cached.rings() == rings {
             ExcludedPairs::Cached(cached)
         } else {
             ExcludedPairs::Walk {
-                mesh: &self.mesh,
-                topology: &self.topology,
+                mesh,
+                topology,
                 rings,
             }
         }
@@ -298,6 +313,30 @@ mod tests {
                     let walk =
                         a == b || triangles_within_rings(topology, corners(a), corners(b), rings);
                     assert_eq!(excluded.excludes(a, b), walk, "{rings} rings: {a} {b}");
+                }
+            }
+        }
+    }
+
+    /// A surface whose triangles each have their own corners (a seam along every edge)
+    /// excludes what the mesh it was cut from excludes, cached and walked.
+    #[test]
+    fn excluded_pairs_join_seams_of_repeated_vertices() {
+        let mesh = generate::torus(1.0, 0.3, 12, 8);
+        let (whole, cut) = (
+            TrackedSurface::new(mesh.clone()),
+            TrackedSurface::new(crate::mesh::triangle_soup(&mesh)),
+        );
+        let n = mesh.triangle_count() as u32;
+        for rings in [2, 1, 3] {
+            let (a_pairs, b_pairs) = (whole.excluded_pairs(rings), cut.excluded_pairs(rings));
+            for a in 0..n {
+                for b in 0..n {
+                    assert_eq!(
+                        a_pairs.excludes(a, b),
+                        b_pairs.excludes(a, b),
+                        "{rings}: {a} {b}"
+                    );
                 }
             }
         }

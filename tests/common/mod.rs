@@ -69,3 +69,23 @@ pub fn folded_cloth() -> stochastic_collision::mesh::TriMesh {
     cloth.set_positions(&folded).unwrap();
     cloth
 }
+
+/// `mesh`'s triangles with corners at one position (bit for bit, -0 as 0) joined under the
+/// lowest index: the reference for self-collision's adjacency, by a map of positions.
+pub fn joined_triangles(mesh: &stochastic_collision::mesh::TriMesh) -> Vec<[u32; 3]> {
+    let mut first: std::collections::HashMap<[u32; 3], u32> = std::collections::HashMap::new();
+    let representative: Vec<u32> = mesh
+        .positions()
+        .iter()
+        .enumerate()
+        .map(|(v, p)| {
+            *first
+                .entry((*p + glam::Vec3::ZERO).to_array().map(f32::to_bits))
+                .or_insert(v as u32)
+        })
+        .collect();
+    mesh.triangles()
+        .iter()
+        .map(|t| t.map(|v| representative[v as usize]))
+        .collect()
+}

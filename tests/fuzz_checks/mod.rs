@@ -272,10 +272,23 @@ pub fn mesh_query(input: &MeshQueryInput) {
     }
     let mut self_pairs = Vec::new();
     self_intersections(&a, &mut ws, &mut self_pairs);
+    // Adjacent: a corner in common once corners at one position are joined.
+    let mut first = std::collections::HashMap::new();
+    let joined: Vec<u32> = (0..mesh_a.vertex_count())
+        .map(|v| {
+            let p = mesh_a.positions()[v] + Vec3::ZERO;
+            *first
+                .entry(p.to_array().map(f32::to_bits))
+                .or_insert(v as u32)
+        })
+        .collect();
     let mut brute_self = Vec::new();
     for t in 0..mesh_a.triangle_count() {
         for u in t + 1..mesh_a.triangle_count() {
-            let (ta, tb) = (mesh_a.triangles()[t], mesh_a.triangles()[u]);
+            let (ta, tb) = (
+                mesh_a.triangles()[t].map(|v| joined[v as usize]),
+                mesh_a.triangles()[u].map(|v| joined[v as usize]),
+            );
             let (x, y) = (mesh_a.triangle(t), mesh_a.triangle(u));
             if !ta.iter().any(|i| tb.contains(i)) && triangles_intersect_f32(x, y) {
                 brute_self.push((t as u32, u as u32));
