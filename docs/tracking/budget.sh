@@ -11,7 +11,7 @@ cargo build --release --example tracking_quality
 q=target/release/examples/tracking_quality
 out=docs/tracking/budget
 : > "$out/output.txt"
-for run in "bunny 800" "teapot 2800" "large_intestine_20k 3500"; do
+for run in "bunny 800" "teapot 1600" "large_intestine_20k 3500"; do
   set -- $run
   mesh=$1 budget=$2
   for seed in 3 4 5; do
