@@ -54,6 +54,11 @@ ccd() { # docs/ccd.md: continuous collision against the discrete query and parry
 }
 
 ccd_reliability() { # docs/ccd.md: the continuous ADB query's confidence on swept pairs
+  # The swept answer model's fit on its training meshes and seeds (its weights are in
+  # src/ccd/swept_answer_model.rs), then its evaluation on other meshes and seeds.
+  { echo "\$ cargo run --release --example fit_swept_answer_model"
+    cargo run --release --quiet --example fit_swept_answer_model 2>/dev/null; } |
+    tee docs/ccd/swept_answer_model.txt
   {
     for args in "--svg docs/ccd/continuous_adb_reliability.svg" "--seed 2" "--seed 3"; do
       echo "\$ cargo run --release --example continuous_adb_reliability -- $args"

@@ -4,7 +4,9 @@
 //! neighbourhood, turning or not; the other moving a little and turning), each answered by the
 //! exact continuous query (`ccd::time_of_impact`, the reference) and by `adb_time_of_impact`
 //! under node budgets of 10, 30, 100 and 300 node pairs: the estimating query (probability of
-//! a contact during the step, "collision" from ½) and the conservative one. Meshes: generated
+//! a contact during the step from the swept answer model, "collision" from ½; beside it the
+//! node pairs' estimates combined as the discrete query does, its confidence before the model)
+//! and the conservative one. Meshes: generated
 //! shapes (a ball, a thin wall, a torus, a seeded random tube and spiky sphere) and, when the
 //! shared meshes are present, Spot and Suzanne, none of them the ADB defaults' training
 //! meshes; motions from `--seed`. Prints, per budget, how many answers the budget cut short,
@@ -23,26 +25,25 @@ mod mesh_pairs;
 #[path = "support/reliability.rs"]
 mod reliability;
 mod support;
+#[path = "support/swept_cases.rs"]
+mod swept_cases;
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use plotters::prelude::*;
-use rand::rngs::Xoshiro256PlusPlus;
-use rand::{RngExt, SeedableRng};
 use stochastic_collision::adb::{AdbTree, Budget};
 use stochastic_collision::bvh::CollisionMesh;
 use stochastic_collision::ccd::{
-    CcdOptions, CcdWorkspace, ContinuousAdbQuery, RigidMotion, adb_time_of_impact, time_of_impact,
+    CcdWorkspace, ContinuousAdbQuery, SweptConfidence, adb_time_of_impact,
 };
-use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::{TriMesh, generate};
-use stochastic_collision::poses::random_direction;
 use support::shared_mesh;
+use swept_cases::cases;
 
 /// Node budgets compared.
-const BUDGETS: [u64; 4] = [10, 30, 100, 300];
+const BUDGETS: [u64; 5] = [3, 10, 30, 100, 300];
 
 struct Args {
     seed: u64,
@@ -97,48 +98,6 @@ fn meshes(seed: u64) -> Vec<(&'static str, AdbTree)> {
         .collect()
 }
 
-/// One case: the two meshes and their motions over the step.
-struct Case {
-    a: usize,
-    b: usize,
-    motion_a: RigidMotion,
-    motion_b: RigidMotion,
-}
-
-fn cases(n: usize, meshes: usize, seed: u64) -> Vec<Case> {
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ 0xC0A7);
-    // A point within `s` of the origin along each axis; a turn of up to `max` radians.
-    let v3 = |rng: &mut Xoshiro256PlusPlus, s: f32| {
-        random_direction(rng) * rng.random_range(0.0..s * 3f32.sqrt())
-    };
-    let rot = |rng: &mut Xoshiro256PlusPlus, max: f32| {
-        Quat::from_axis_angle(random_direction(rng), rng.random_range(0.0..max))
-    };
-    (0..n)
-        .map(|k| {
-            let (a, b) = (rng.random_range(0..meshes), rng.random_range(0..meshes));
-            // A third of the flights do not turn; the rest turn up to a radian over the step.
-            let turn = if k % 3 == 0 { 0.0 } else { 1.0 };
-            let start = rot(&mut rng, 3.0);
-            let motion_a = RigidMotion::new(
-                Pose::new(v3(&mut rng, 2.0), start),
-                Pose::new(v3(&mut rng, 2.0), start * rot(&mut rng, turn + 1e-3)),
-            );
-            let still = rot(&mut rng, 3.0);
-            let motion_b = RigidMotion::new(
-                Pose::new(v3(&mut rng, 0.3), still),
-                Pose::new(v3(&mut rng, 0.3), still * rot(&mut rng, 0.3)),
-            );
-            Case {
-                a,
-                b,
-                motion_a,
-                motion_b,
-            }
-        })
-        .collect()
-}
-
 /// What one budget's answers came to.
 #[derive(Default)]
 struct Tally {
@@ -151,6 +110,11 @@ struct Tally {
     bins: reliability::Bins,
     conservative_missed: usize,
     conservative_false: usize,
+    /// The same answers with the node pairs' estimates combined as the discrete query does
+    /// (`SweptConfidence::Combined`, the confidence before the swept answer model).
+    combined_missed: usize,
+    combined_false: usize,
+    combined_brier_cut: f64,
 }
 
 fn main() {
@@ -174,19 +138,12 @@ fn main() {
             eprint!("\rcase {k}/{}", cases.len());
         }
         let (a, b) = (&meshes[c.a].1, &meshes[c.b].1);
-        let reference = time_of_impact(
-            a.collision_mesh(),
-            &c.motion_a,
-            b.collision_mesh(),
-            &c.motion_b,
-            &CcdOptions::default(),
-            &mut ws,
-        )
-        .expect("finite motions");
+        let reference = c.reference(a, b, &mut ws);
         let touches = reference.is_some();
         contacts += usize::from(touches);
         for (t, &budget) in tallies.iter_mut().zip(&BUDGETS) {
             let query = ContinuousAdbQuery::with_budget(Budget::NodePairs(budget));
+            debug_assert!(matches!(query.confidence, SweptConfidence::Model(_)));
             let out = adb_time_of_impact(a, &c.motion_a, b, &c.motion_b, &query, &mut ws)
                 .expect("finite motions");
             let truth = f64::from(u8::from(touches));
@@ -194,9 +151,17 @@ fn main() {
             t.brier += square;
             t.missed += usize::from(touches && !out.collides);
             t.false_contacts += usize::from(!touches && out.collides);
+            // The combined estimates instead, where the model decided.
+            let (combined, combined_collides) = match out.frontier {
+                Some(f) => (f.raw_confidence, f.raw_confidence >= 0.5),
+                None => (out.probability, out.collides),
+            };
+            t.combined_missed += usize::from(touches && !combined_collides);
+            t.combined_false += usize::from(!touches && combined_collides);
             if !out.settled {
                 t.cut += 1;
                 t.brier_cut += square;
+                t.combined_brier_cut += (combined - truth).powi(2);
                 reliability::add(&mut t.bins, out.probability, touches);
             }
             let query = ContinuousAdbQuery::conservative(Budget::NodePairs(budget));
@@ -227,18 +192,21 @@ fn report(args: &Args, names: &[&str], n: usize, contacts: usize, tallies: &[Tal
     );
     let _ = writeln!(
         s,
-        "node budget | cut short | estimating: missed, false, error | Brier (all, cut) | conservative: missed, false"
+        "node budget | cut short | estimating (swept answer model): missed, false, error | Brier (all, cut) | combined estimates: missed, false, Brier (cut) | conservative: missed, false"
     );
     for (t, budget) in tallies.iter().zip(BUDGETS) {
         let _ = writeln!(
             s,
-            "{budget:>11} | {:>9} | {:>7}, {:>5}, {:>5.1} % | {:.3}, {:.3} | {:>7}, {:>5}",
+            "{budget:>11} | {:>9} | {:>7}, {:>5}, {:>5.1} % | {:.3}, {:.3} | {:>7}, {:>5}, {:.3} | {:>7}, {:>5}",
             t.cut,
             t.missed,
             t.false_contacts,
             100.0 * (t.missed + t.false_contacts) as f64 / n.max(1) as f64,
             t.brier / n.max(1) as f64,
             t.brier_cut / t.cut.max(1) as f64,
+            t.combined_missed,
+            t.combined_false,
+            t.combined_brier_cut / t.cut.max(1) as f64,
             t.conservative_missed,
             t.conservative_false,
         );

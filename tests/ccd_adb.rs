@@ -9,8 +9,8 @@ use rand::{RngExt, SeedableRng};
 use stochastic_collision::adb::{AdbTree, Budget};
 use stochastic_collision::bvh::CollisionMesh;
 use stochastic_collision::ccd::{
-    CcdError, CcdOptions, CcdWorkspace, ContinuousAdbQuery, RigidMotion, TimeOfImpact,
-    adb_time_of_impact, time_of_impact,
+    CcdError, CcdOptions, CcdWorkspace, ContinuousAdbQuery, RigidMotion, SweptConfidence,
+    TimeOfImpact, adb_time_of_impact, time_of_impact,
 };
 use stochastic_collision::geometry::Pose;
 use stochastic_collision::mesh::generate;
@@ -155,6 +155,20 @@ fn the_estimate_is_a_probability_certain_only_for_contacts_found_and_reproducibl
             let w = out.witness.expect("a witness for the pairs left");
             assert!((0.0..=1.0).contains(&w.time) && w.normal.is_normalized());
             assert!(out.frontier_pairs > 0);
+            // The swept answer model's input, and the combined estimates it replaces.
+            let f = out.frontier.expect("what the search left");
+            assert_eq!(f.pairs, out.frontier_pairs);
+            assert!(f.visited == out.node_pairs_visited && f.earliest <= f64::from(w.time) + 1e-6);
+            assert!((0.0..=1.0).contains(&f.raw_confidence) && f.max_probability <= 1.0);
+            let combined = ContinuousAdbQuery {
+                confidence: SweptConfidence::Combined,
+                ..query.clone()
+            };
+            let raw = adb_time_of_impact(a, &ma, b, &mb, &combined, &mut ws).unwrap();
+            assert_eq!(raw.probability, f.raw_confidence, "case {k}");
+            assert_eq!(raw.frontier, out.frontier, "case {k}");
+        } else {
+            assert!(out.frontier.is_none(), "case {k}");
         }
     }
     assert!(estimated > 10, "{estimated}");

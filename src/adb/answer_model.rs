@@ -7,6 +7,7 @@
 //! trees the traversal saw, and how different the two meshes' sizes are. The frontier's raw
 //! confidence (the pair estimates combined) is one of these features; the model learns how far
 //! to trust it given the others.
+use super::logistic::{fit_logistic, logistic, logit};
 use super::traverse::{CertificateHint, Frontier};
 
 /// Number of features (the bias included).
@@ -18,15 +19,6 @@ pub const ANSWER_FEATURES: usize = 10;
 pub struct AnswerModel {
     /// Weights, in the order of [`AnswerModel::features`].
     pub weights: [f64; ANSWER_FEATURES],
-}
-
-/// Logits are clamped to this magnitude (probabilities within about 5e-5 of 0 or 1).
-const LOGIT_CLAMP: f64 = 10.0;
-
-/// The log-odds of `p`, clamped.
-fn logit(p: f64) -> f64 {
-    let p = p.clamp(1e-12, 1.0 - 1e-12);
-    (p / (1.0 - p)).ln().clamp(-LOGIT_CLAMP, LOGIT_CLAMP)
 }
 
 impl AnswerModel {
@@ -78,8 +70,7 @@ impl AnswerModel {
 
     /// The model's confidence for features `x`.
     pub fn confidence_of(&self, x: &[f64; ANSWER_FEATURES]) -> f64 {
-        let z: f64 = self.weights.iter().zip(x).map(|(w, v)| w * v).sum();
-        1.0 / (1.0 + (-z.clamp(-4.0 * LOGIT_CLAMP, 4.0 * LOGIT_CLAMP)).exp())
+        logistic(&self.weights, x)
     }
 
     /// The model's confidence for an unsettled answer.
@@ -97,71 +88,8 @@ impl AnswerModel {
     /// method on the log-likelihood with a small ridge penalty `ridge` (not on the bias).
     /// Deterministic; `None` when there are no samples or the Newton steps fail.
     pub fn fit(samples: &[([f64; ANSWER_FEATURES], bool)], ridge: f64) -> Option<Self> {
-        if samples.is_empty() {
-            return None;
-        }
-        const N: usize = ANSWER_FEATURES;
-        let mut w = [0.0f64; N];
-        for _ in 0..50 {
-            let model = AnswerModel { weights: w };
-            let mut grad = [0.0f64; N];
-            let mut hess = [[0.0f64; N]; N];
-            for (x, y) in samples {
-                let p = model.confidence_of(x);
-                let r = f64::from(u8::from(*y)) - p;
-                let v = (p * (1.0 - p)).max(1e-12);
-                for i in 0..N {
-                    grad[i] += r * x[i];
-                    for j in 0..N {
-                        hess[i][j] += v * x[i] * x[j];
-                    }
-                }
-            }
-            for i in 1..N {
-                grad[i] -= ridge * w[i];
-                hess[i][i] += ridge;
-            }
-            hess[0][0] += 1e-9;
-            let step = solve(hess, grad)?;
-            let mut largest = 0.0f64;
-            for i in 0..N {
-                w[i] += step[i];
-                largest = largest.max(step[i].abs());
-            }
-            if largest < 1e-9 {
-                break;
-            }
-        }
-        w.iter()
-            .all(|v| v.is_finite())
-            .then_some(AnswerModel { weights: w })
+        fit_logistic(samples, ridge).map(|weights| AnswerModel { weights })
     }
-}
-
-/// Solves `a · x = b` by Gaussian elimination with partial pivoting; `None` when singular.
-fn solve<const N: usize>(mut a: [[f64; N]; N], mut b: [f64; N]) -> Option<[f64; N]> {
-    for col in 0..N {
-        let pivot = (col..N).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[pivot][col].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(col, pivot);
-        b.swap(col, pivot);
-        let (pivot_row, pivot_b) = (a[col], b[col]);
-        for (row, b_row) in a.iter_mut().zip(b.iter_mut()).skip(col + 1) {
-            let f = row[col] / pivot_row[col];
-            for (v, p) in row.iter_mut().zip(pivot_row).skip(col) {
-                *v -= f * p;
-            }
-            *b_row -= f * pivot_b;
-        }
-    }
-    let mut x = [0.0f64; N];
-    for row in (0..N).rev() {
-        let s: f64 = (row + 1..N).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - s) / a[row][row];
-    }
-    Some(x)
 }
 
 #[cfg(test)]

@@ -57,6 +57,7 @@ mod estimator;
 mod exact;
 mod fit;
 mod interior;
+pub(crate) mod logistic;
 mod options;
 pub mod probability;
 mod queue;

@@ -117,8 +117,12 @@ pub(crate) struct FrontierPair {
     pub a: u32,
     pub b: u32,
     pub from: f64,
+    /// The end of the pair's window (cut at the search's limit).
+    pub to: f64,
     pub at: f64,
     pub centre_distance: f64,
+    /// How deep the two boxes overlap at `at` ([`overlap_depth`](super::window::overlap_depth)).
+    pub depth: f64,
 }
 
 impl DescentScratch {
@@ -151,8 +155,10 @@ impl DescentScratch {
                     a: p.a,
                     b: p.b,
                     from: p.from,
+                    to: p.to.min(until),
                     at: (k0 + u * (k1 - k0)) / n,
                     centre_distance: (d0 + u * dd).length(),
+                    depth: super::window::overlap_depth(ba.at(u), bb.at(u)),
                 }
             })
     }

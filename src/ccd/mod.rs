@@ -28,6 +28,7 @@ mod inclusion;
 mod primitive;
 mod query;
 mod swept;
+mod swept_answer_model;
 mod time_critical;
 pub(crate) mod window;
 
@@ -38,6 +39,7 @@ pub use query::{
     CcdError, CcdOptions, CcdWorkspace, ImpactFeatures, RigidMotion, TimeOfImpact,
     deforming_time_of_impact, time_of_impact,
 };
+pub use swept_answer_model::{SWEPT_FEATURES, SweptAnswerModel, SweptFrontier};
 pub use time_critical::{
-    ContinuousAdbOutcome, ContinuousAdbQuery, SweptWitness, adb_time_of_impact,
+    ContinuousAdbOutcome, ContinuousAdbQuery, SweptConfidence, SweptWitness, adb_time_of_impact,
 };

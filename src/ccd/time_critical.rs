@@ -6,7 +6,8 @@
 //! left unexplored are what could still hold an earlier (or the only) contact: each is given
 //! the ADB probability model's estimate at the moment in the step when its boxes' centres come
 //! closest (the swept pair at its deepest, the pose where the discrete model sees it most
-//! likely to collide), and they are combined as the discrete query combines its frontier.
+//! likely to collide); the answer's confidence is the [`SweptAnswerModel`]'s, fitted on swept
+//! pairs, from those estimates and what else the search left.
 //! The conservative variant answers "collision" whenever any pair is left, at the earliest
 //! time one can meet: at a given budget it never misses a contact, it only adds false ones.
 use std::sync::Arc;
@@ -19,6 +20,7 @@ use super::query::{
     CcdError, CcdOptions, CcdWorkspace, RigidMotion, RigidPair, TimeOfImpact, overlap_at_start,
     validate_motions,
 };
+use super::swept_answer_model::{SweptAnswerModel, SweptFrontier};
 use crate::adb::{AdbTree, Budget, CalibratedEstimator, CollisionEstimator, NodePair};
 
 /// Disjoint node pairs of one contact region count as one piece of evidence per this many, as
@@ -36,6 +38,9 @@ pub struct ContinuousAdbQuery {
     pub budget: Budget,
     /// The probability model for the node pairs left when the budget runs out.
     pub estimator: Arc<dyn CollisionEstimator>,
+    /// How those estimates become the answer's confidence (by default the fitted
+    /// [`SweptAnswerModel`]).
+    pub confidence: SweptConfidence,
     /// The confidence from which an unsettled answer says "collision" (½ by default; not read
     /// when [`conservative`](Self::conservative)). A confidence of 0 never says "collision".
     pub collide_at: f64,
@@ -47,12 +52,13 @@ pub struct ContinuousAdbQuery {
 }
 
 impl Default for ContinuousAdbQuery {
-    /// No budget (the exact answer), the calibrated estimator, `collide_at` ½, not
-    /// conservative.
+    /// No budget (the exact answer), the calibrated estimator, the fitted answer model,
+    /// `collide_at` ½, not conservative.
     fn default() -> Self {
         Self {
             budget: Budget::Unlimited,
             estimator: Arc::new(CalibratedEstimator::default()),
+            confidence: SweptConfidence::Model(SweptAnswerModel::FITTED),
             collide_at: 0.5,
             conservative: false,
             options: CcdOptions::default(),
@@ -79,6 +85,18 @@ impl ContinuousAdbQuery {
     }
 }
 
+/// How an unsettled continuous answer's confidence is made from what the search left.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SweptConfidence {
+    /// A logistic model of the [`SweptFrontier`]'s features, fitted on swept pairs (the
+    /// default: [`SweptAnswerModel::FITTED`]).
+    Model(SweptAnswerModel),
+    /// The node pairs' estimates combined as the discrete query combines its frontier,
+    /// `1 − (Π (1 − p))^(1/2)` ([`SweptFrontier::raw_confidence`]): not calibrated on swept
+    /// pairs (too low under a tight budget, too high under a looser one).
+    Combined,
+}
+
 /// Where an unsettled "collision" probably is: the most probable node pair left, at the moment
 /// its boxes' centres come closest.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,8 +121,8 @@ pub struct ContinuousAdbOutcome {
     /// Whether the meshes are reported as touching during the step.
     pub collides: bool,
     /// Confidence that they touch: 1 when an exact contact was found, 0 when the search ended
-    /// without one; otherwise `1 − (Π (1 − p))^(1/2)` over the node pairs left (each at its
-    /// closest approach), an estimate.
+    /// without one; otherwise the query's [`SweptConfidence`] of what the search left (by
+    /// default the fitted [`SweptAnswerModel`]), an estimate.
     pub probability: f64,
     /// When they touch, if reported so: never later than the first contact. Settled: the time
     /// of impact; otherwise the earliest time a node pair left (or the contact found) can meet.
@@ -121,6 +139,9 @@ pub struct ContinuousAdbOutcome {
     pub node_pairs_visited: u64,
     /// Node pairs left when the budget ran out.
     pub frontier_pairs: u32,
+    /// What the search left when the budget ran out before it found a contact (the answer
+    /// model's input).
+    pub frontier: Option<SweptFrontier>,
 }
 
 /// Whether, when and how likely two rigid ADB-trees moving over a step touch, within the
@@ -130,8 +151,9 @@ pub struct ContinuousAdbOutcome {
 /// The exact continuous search runs until the budget runs out. If it ends first, the answer
 /// is exact. Otherwise the node pairs it left are what could still hold an earlier (or the
 /// only) contact: each is given the ADB probability model's estimate at the moment in the step
-/// when its boxes' centres come closest (the swept pair at its deepest), and they are combined
-/// as [`adb_intersects`](crate::adb::adb_intersects) combines its frontier. The conservative
+/// when its boxes' centres come closest (the swept pair at its deepest), and the answer's
+/// confidence is the query's [`SweptConfidence`] of them and of what else the search left
+/// (by default the [`SweptAnswerModel`] fitted on swept pairs). The conservative
 /// variant says "collision" whenever a pair is left, at the earliest time one can meet: at a
 /// given budget it misses no contact, it only adds false ones.
 ///
@@ -182,6 +204,7 @@ pub fn adb_time_of_impact(
         budget_exhausted: false,
         node_pairs_visited: 0,
         frontier_pairs: 0,
+        frontier: None,
     };
     if let Some(hit) = overlap_at_start(ma, &motion_a.start, mb, &motion_b.start, ws) {
         return Ok(ContinuousAdbOutcome {
@@ -229,12 +252,31 @@ pub fn adb_time_of_impact(
         return Ok(out);
     }
     // The pairs left: each at its closest approach, combined as the discrete query does.
+    let radius = |tree: &AdbTree, i: u32| {
+        f64::from(
+            tree.collision_mesh().bvh().nodes()[i as usize]
+                .aabb()
+                .extents()
+                .length(),
+        ) * 0.5
+    };
     let mut log_miss = 0.0f64;
     let mut earliest = f64::INFINITY;
+    let mut windows = 0.0f64;
+    let mut nearest = f64::INFINITY;
+    let mut deepest = 0.0f64;
     let mut best: Option<(f64, super::descent::FrontierPair)> = None;
     for pair in ws.descent.frontier(step.pieces, end.until) {
         out.frontier_pairs += 1;
         earliest = earliest.min(pair.from);
+        windows += (pair.to - pair.from).max(0.0);
+        let reach = radius(a, pair.a) + radius(b, pair.b);
+        nearest = nearest.min(if reach > 0.0 {
+            pair.centre_distance / reach
+        } else {
+            0.0
+        });
+        deepest = deepest.max(pair.depth);
         let estimate =
             NodePair::at_distance(a, b, pair.centre_distance as f32, pair.a, pair.b, true);
         let p = query
@@ -247,10 +289,29 @@ pub fn adb_time_of_impact(
         }
     }
     let left = out.frontier_pairs > 0;
-    let estimated = if left {
+    let raw = if left {
         1.0 - (log_miss / REDUNDANCY).exp()
     } else {
         0.0
+    };
+    let diagonal =
+        |tree: &AdbTree| f64::from(tree.collision_mesh().bvh().root_aabb().extents().length());
+    let frontier = SweptFrontier {
+        raw_confidence: raw,
+        max_probability: best.as_ref().map_or(0.0, |(p, _)| *p),
+        pairs: out.frontier_pairs,
+        visited: end.pops,
+        nearest_centres: if left { nearest } else { 0.0 },
+        mean_window: windows / f64::from(out.frontier_pairs.max(1)),
+        earliest: if left { earliest.clamp(0.0, 1.0) } else { 0.0 },
+        size_ratio: diagonal(a) / diagonal(b).max(f64::MIN_POSITIVE),
+        tree_nodes: (ma.bvh().nodes().len() + mb.bvh().nodes().len()) as u64,
+        deepest,
+    };
+    let estimated = match (left, query.confidence) {
+        (false, _) => 0.0,
+        (true, SweptConfidence::Combined) => raw,
+        (true, SweptConfidence::Model(model)) => model.confidence(&frontier),
     };
     let earliest = earliest.clamp(0.0, 1.0) as f32;
     if let Some(hit) = end.hit {
@@ -263,6 +324,7 @@ pub fn adb_time_of_impact(
             hit.time
         });
     } else {
+        out.frontier = left.then_some(frontier);
         out.probability = estimated;
         out.collides =
             left && (query.conservative || (estimated > 0.0 && estimated >= query.collide_at));

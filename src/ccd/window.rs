@@ -53,7 +53,6 @@ impl MovingBox {
     }
 
     /// The box's corners at time `s` of its piece.
-    #[cfg(test)]
     pub fn at(&self, s: f64) -> (DVec3, DVec3) {
         (self.lo0.lerp(self.lo1, s), self.hi0.lerp(self.hi1, s))
     }
@@ -74,6 +73,25 @@ impl MovingBox {
         let d = self.hi0.max(self.hi1) - self.lo0.min(self.lo1);
         d.x * d.y + d.y * d.z + d.z * d.x
     }
+}
+
+/// How deep two boxes `(lo, hi)` overlap: over the three axes, the least overlap over the
+/// smaller of the two extents on that axis, clamped to `[0, 1]` (1: on every axis one box
+/// spans the other's extent or more, as a ball crossing a thin wall; 0: apart or touching).
+pub(crate) fn overlap_depth(a: (DVec3, DVec3), b: (DVec3, DVec3)) -> f64 {
+    let overlap = a.1.min(b.1) - a.0.max(b.0);
+    let extent = (a.1 - a.0).min(b.1 - b.0);
+    (0..3)
+        .map(|k| {
+            if extent[k] > 0.0 {
+                (overlap[k] / extent[k]).clamp(0.0, 1.0)
+            } else if overlap[k] >= 0.0 {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .fold(1.0, f64::min)
 }
 
 /// The times within `window` (a sub-interval of `[0, 1]`) at which `a`, grown by `margin` on
@@ -124,6 +142,38 @@ mod tests {
 
     fn cube(at: Vec3) -> Aabb {
         Aabb::new(at - Vec3::splat(0.5), at + Vec3::splat(0.5))
+    }
+
+    #[test]
+    fn overlap_depth_is_the_least_relative_overlap_over_the_axes() {
+        let b = |lo: [f64; 3], hi: [f64; 3]| (DVec3::from(lo), DVec3::from(hi));
+        // A small box crossing a thin, wide slab: it spans the slab's thickness, and the slab
+        // spans its height and depth.
+        let slab = b([-0.01, -3.0, -8.0], [0.01, 3.0, 8.0]);
+        assert_eq!(
+            overlap_depth(b([-0.15, 0.0, 0.0], [0.15, 0.3, 0.3]), slab),
+            1.0
+        );
+        // Half of a unit cube inside another along x, all of it along y and z.
+        let unit = b([0.0; 3], [1.0; 3]);
+        assert_eq!(
+            overlap_depth(b([0.5, 0.0, 0.0], [1.5, 1.0, 1.0]), unit),
+            0.5
+        );
+        // Touching faces, and apart.
+        assert_eq!(
+            overlap_depth(b([1.0, 0.0, 0.0], [2.0, 1.0, 1.0]), unit),
+            0.0
+        );
+        assert_eq!(
+            overlap_depth(b([3.0, 0.0, 0.0], [4.0, 1.0, 1.0]), unit),
+            0.0
+        );
+        // A flat box (zero extent on y) inside the other's y range counts as spanned there.
+        assert_eq!(
+            overlap_depth(b([0.25, 0.5, 0.0], [0.75, 0.5, 1.0]), unit),
+            1.0
+        );
     }
 
     #[test]

@@ -145,8 +145,9 @@ pub struct CollisionConfig {
     /// continuous query ([`ccd::adb_time_of_impact`](crate::ccd::adb_time_of_impact)) within
     /// the pair's ADB budget. Conservative (the default): when the budget runs out with node
     /// pairs left, the pair collides at the earliest time one can meet (no tunnelling is ever
-    /// missed, some contacts are false). Otherwise it collides when the estimate of the pairs
-    /// left reaches [`adb_collide_at`](Self::adb_collide_at).
+    /// missed, some contacts are false). Otherwise it collides when the confidence of what
+    /// is left (the fitted [`SweptAnswerModel`](crate::ccd::SweptAnswerModel)) reaches
+    /// [`adb_collide_at`](Self::adb_collide_at).
     pub continuous_adb_conservative: bool,
     /// How much the Response stage may do per run ([`ResponseBudget`]; unlimited by default).
     /// What is left stays in the [`ContactQueue`](super::ContactQueue) for the next run,
