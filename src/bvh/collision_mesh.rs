@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::build::BvhBuildOptions;
 use super::tree::Bvh;
-use crate::mesh::{MeshError, TriMesh};
+use crate::mesh::{MeshError, Topology, TriMesh};
 
 /// A triangle mesh together with its [`Bvh`], always consistent: what every query takes.
 ///
@@ -28,6 +28,7 @@ pub struct CollisionMesh {
     closed: OnceLock<bool>,
     components: OnceLock<Vec<u32>>,
     welded: OnceLock<Option<Vec<[u32; 3]>>>,
+    topology: OnceLock<Topology>,
 }
 
 impl Clone for CollisionMesh {
@@ -42,6 +43,7 @@ impl Clone for CollisionMesh {
             closed,
             components: self.components.clone(),
             welded: self.welded.clone(),
+            topology: self.topology.clone(),
         }
     }
 }
@@ -61,6 +63,7 @@ impl CollisionMesh {
             closed: OnceLock::new(),
             components: OnceLock::new(),
             welded: OnceLock::new(),
+            topology: OnceLock::new(),
         }
     }
 
@@ -91,6 +94,12 @@ impl CollisionMesh {
     /// Only a closed mesh has an inside for [`ExactOptions::solid`](super::ExactOptions::solid).
     pub fn is_closed(&self) -> bool {
         *self.closed.get_or_init(|| self.mesh.is_closed())
+    }
+
+    /// The mesh's [`Topology`] (by vertex index), computed once: it does not change with
+    /// positions.
+    pub fn topology(&self) -> &Topology {
+        self.topology.get_or_init(|| Topology::new(&self.mesh))
     }
 
     /// The triangles of the [welded](TriMesh::welded) mesh (corners at one position joined

@@ -13,6 +13,89 @@ use crate::geometry::Pose;
 thread_local! {
     /// The inside vertices of the pair being answered (no allocation per call once grown).
     static INSIDE: RefCell<Vec<(u32, Vec3, u32)>> = const { RefCell::new(Vec::new()) };
+    /// The classification's buffers, reused the same way.
+    static CLASSIFY: RefCell<Classify> = RefCell::new(Classify::default());
+}
+
+/// Buffers of [`inside_vertices`].
+#[derive(Default)]
+struct Classify {
+    /// Per vertex of the soft mesh: 0 not classified yet, 1 inside, 2 outside.
+    state: Vec<u8>,
+    /// Per triangle of the soft mesh: whether it meets the solid's surface.
+    crossing: Vec<bool>,
+    stack: Vec<u32>,
+}
+
+/// Appends to `out`, ascending, the referenced vertices of `soft` inside the closed `solid`
+/// (`to_solid` places `soft` in `solid`'s frame), each with where it is in `solid`'s frame and
+/// one of its triangles. `crossing` are the soft mesh's triangles that meet `solid`'s surface
+/// (every one: the pair's intersecting triangle pairs).
+///
+/// An edge of the soft mesh that meets the solid's surface makes every triangle using it meet
+/// the surface; so an edge with a triangle that does not keeps both its ends on the same side.
+/// The vertices joined by such edges are classified together: one exact test (ray parity,
+/// [`contains_point`]) per piece of the soft mesh that no crossing separates, instead of one
+/// per vertex.
+fn inside_vertices(
+    (soft, to_solid): (&CollisionMesh, &Pose),
+    solid: &CollisionMesh,
+    crossing: impl Iterator<Item = u32>,
+    c: &mut Classify,
+    out: &mut Vec<(u32, Vec3, u32)>,
+) {
+    let topology = soft.topology();
+    let positions = soft.mesh().positions();
+    let root = solid.bvh().root_aabb();
+    c.crossing.clear();
+    c.crossing.resize(soft.mesh().triangle_count(), false);
+    for t in crossing {
+        c.crossing[t as usize] = true;
+    }
+    c.state.clear();
+    c.state.resize(positions.len(), 0);
+    for v in 0..positions.len() as u32 {
+        if c.state[v as usize] != 0 || topology.vertex_triangles(v).is_empty() {
+            continue;
+        }
+        let local = to_solid.transform_point(positions[v as usize]);
+        let in_box = local.cmpge(root.min).all() && local.cmple(root.max).all();
+        let mark = if in_box && contains_point(solid, local) {
+            1
+        } else {
+            2
+        };
+        c.state[v as usize] = mark;
+        c.stack.clear();
+        c.stack.push(v);
+        while let Some(u) = c.stack.pop() {
+            for &e in topology.vertex_edges(u) {
+                let edge = topology.edge(e);
+                if edge.triangles.iter().all(|&t| c.crossing[t as usize]) {
+                    continue;
+                }
+                let w = if edge.vertices[0] == u {
+                    edge.vertices[1]
+                } else {
+                    edge.vertices[0]
+                };
+                if c.state[w as usize] == 0 {
+                    c.state[w as usize] = mark;
+                    c.stack.push(w);
+                }
+            }
+        }
+    }
+    out.extend(
+        c.state
+            .iter()
+            .enumerate()
+            .filter(|(_, m)| **m == 1)
+            .map(|(v, _)| {
+                let local = to_solid.transform_point(positions[v]);
+                (v as u32, local, topology.vertex_triangles(v as u32)[0])
+            }),
+    );
 }
 
 /// The vertices of `soft` (at `pose_soft`) inside the closed mesh `solid` (at `pose_solid`),
@@ -23,12 +106,14 @@ thread_local! {
 /// towards the closest surface point (with `soft_first`, `soft` is the pair's first entity:
 /// the normal points from the vertex's surface point into the solid; otherwise out of it),
 /// its triangle pair one of the vertex's triangles and the closest triangle of `solid`.
-/// Vertices on the surface (within a millionth of `solid`'s size) get none. Nothing when
-/// `solid` is not closed (an open mesh has no inside).
+/// `pairs` are the pair's intersecting triangle pairs, all of them (first entity's triangle,
+/// second's): which vertices are inside is decided by one exact test per piece of `soft` they
+/// do not cut ([`inside_vertices`]). Vertices on the surface (within a millionth of `solid`'s
+/// size) get none. Nothing when `solid` is not closed (an open mesh has no inside).
 pub(crate) fn contained_vertex_contacts(
     (soft, pose_soft): (&CollisionMesh, &Pose),
     (solid, pose_solid): (&CollisionMesh, &Pose),
-    soft_first: bool,
+    (soft_first, pairs): (bool, &[TrianglePair]),
     (max, rotation): (usize, u64),
     out: &mut impl Extend<ContactPoint>,
 ) {
@@ -42,11 +127,10 @@ pub(crate) fn contained_vertex_contacts(
     INSIDE.with_borrow_mut(|inside| {
         // (vertex, where it is in `solid`'s frame, a triangle at it), reused from call to call.
         inside.clear();
-        inside.extend(positions.iter().enumerate().filter_map(|(v, &p)| {
-            let local = to_solid.transform_point(p);
-            let in_box = local.cmpge(root.min).all() && local.cmple(root.max).all();
-            (in_box && contains_point(solid, local)).then_some((v as u32, local, u32::MAX))
-        }));
+        let crossing = pairs.iter().map(|p| if soft_first { p.a } else { p.b });
+        CLASSIFY.with_borrow_mut(|c| {
+            inside_vertices((soft, &to_solid), solid, crossing, c, inside);
+        });
         if inside.is_empty() {
             return;
         }
@@ -57,23 +141,7 @@ pub(crate) fn contained_vertex_contacts(
             k += 1;
             k > first && (k - 1 - first).is_multiple_of(stride)
         });
-        // A triangle at each chosen vertex (the response spreads a contact over its
-        // triangle's corners by the contact point's barycentric weights: at a corner, all to
-        // that corner).
-        for (t, corners) in soft.mesh().triangles().iter().enumerate() {
-            for v in corners {
-                if let Ok(k) = inside.binary_search_by_key(v, |c| c.0)
-                    && inside[k].2 == u32::MAX
-                {
-                    inside[k].2 = t as u32;
-                }
-            }
-        }
         out.extend(inside.iter().filter_map(|&(v, local, t)| {
-            // An unreferenced vertex has no triangle to move.
-            if t == u32::MAX {
-                return None;
-            }
             let surface = closest_surface_point(solid, local)?;
             // On the surface (to rounding): the crossing triangles' contacts hold it, and
             // the direction to the surface is noise.
@@ -117,6 +185,76 @@ mod tests {
     use super::*;
     use crate::mesh::generate;
 
+    /// The intersecting triangle pairs of `soft` and `solid`, in the pair's order (`soft`
+    /// first or second).
+    fn crossing_pairs(
+        (soft, soft_pose): (&CollisionMesh, &Pose),
+        (solid, solid_pose): (&CollisionMesh, &Pose),
+        soft_first: bool,
+    ) -> Vec<TrianglePair> {
+        let mut pairs = Vec::new();
+        let ws = &mut crate::bvh::QueryWorkspace::new();
+        if soft_first {
+            crate::bvh::intersecting_pairs(soft, soft_pose, solid, solid_pose, ws, &mut pairs);
+        } else {
+            crate::bvh::intersecting_pairs(solid, solid_pose, soft, soft_pose, ws, &mut pairs);
+        }
+        pairs
+    }
+
+    /// Wavy, folded sheets across a ball and a box at many poses: the inside vertices found
+    /// with one test per uncut piece are those a direct test of every vertex finds.
+    #[test]
+    fn inside_vertices_are_those_a_test_of_every_vertex_finds() {
+        let solids = [
+            CollisionMesh::new(generate::icosphere(0.5, 2)),
+            CollisionMesh::new(generate::cuboid(Vec3::new(0.6, 0.2, 0.4), 2)),
+        ];
+        let mut sheet = generate::cloth_grid(2.0, 2.0, 24, 24);
+        let wavy: Vec<Vec3> = sheet
+            .positions()
+            .iter()
+            .map(|p| Vec3::new(p.x, 0.3 * (3.0 * p.x).sin() * (2.0 * p.z).cos(), p.z))
+            .collect();
+        sheet.set_positions(&wavy).unwrap();
+        let sheet = CollisionMesh::new(sheet);
+        let mut c = Classify::default();
+        let (mut cut, mut checked) = (0, 0);
+        for (k, solid) in solids.iter().enumerate() {
+            for step in 0..24 {
+                let f = step as f32;
+                let pose = Pose::new(
+                    Vec3::new(0.05 * f - 0.6, 0.03 * f - 0.35, 0.02 * f),
+                    glam::Quat::from_euler(glam::EulerRot::XYZ, 0.13 * f, 0.29 * f, 0.07 * f),
+                );
+                for soft_first in [true, false] {
+                    let pairs =
+                        crossing_pairs((&sheet, &pose), (solid, &Pose::IDENTITY), soft_first);
+                    cut += usize::from(!pairs.is_empty());
+                    let crossing = pairs.iter().map(|p| if soft_first { p.a } else { p.b });
+                    let mut found = Vec::new();
+                    inside_vertices((&sheet, &pose), solid, crossing, &mut c, &mut found);
+                    // The same placement as the classification's, so that both test the
+                    // same points.
+                    let to_solid = Pose::IDENTITY.inverse_mul(&pose);
+                    let direct: Vec<u32> = (0..sheet.mesh().vertex_count() as u32)
+                        .filter(|&v| {
+                            let p = sheet.mesh().positions()[v as usize];
+                            contains_point(solid, to_solid.transform_point(p))
+                        })
+                        .collect();
+                    let got: Vec<u32> = found.iter().map(|x| x.0).collect();
+                    assert_eq!(got, direct, "solid {k}, step {step}");
+                    checked += direct.len();
+                    for &(v, _, t) in &found {
+                        assert!(sheet.mesh().triangles()[t as usize].contains(&v));
+                    }
+                }
+            }
+        }
+        assert!(cut > 20 && checked > 100, "{cut} {checked}");
+    }
+
     /// A sheet sunk into a box: every vertex inside gets a contact pushing it up to the top
     /// face, as deep as it sank; vertices outside get none.
     #[test]
@@ -128,10 +266,12 @@ mod tests {
         let sheet_pose = Pose::from_translation(Vec3::new(2.5, -0.05, 0.0));
         for soft_first in [true, false] {
             let mut out = Vec::new();
+            let pairs = crossing_pairs((&sheet, &sheet_pose), (&floor, &floor_pose), soft_first);
+            assert!(!pairs.is_empty(), "the sheet crosses the box's side");
             contained_vertex_contacts(
                 (&sheet, &sheet_pose),
                 (&floor, &floor_pose),
-                soft_first,
+                (soft_first, &pairs),
                 (1000, 0),
                 &mut out,
             );
@@ -162,7 +302,7 @@ mod tests {
                 contained_vertex_contacts(
                     (&sheet, &sheet_pose),
                     (&floor, &floor_pose),
-                    soft_first,
+                    (soft_first, &pairs),
                     (4, rotation),
                     &mut few,
                 );
@@ -176,7 +316,7 @@ mod tests {
         contained_vertex_contacts(
             (&sheet, &sheet_pose),
             (&sheet, &Pose::IDENTITY),
-            true,
+            (true, &[]),
             (1000, 0),
             &mut none,
         );

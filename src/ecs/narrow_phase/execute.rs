@@ -440,7 +440,7 @@ impl Context<'_> {
                         contained_vertex_contacts(
                             soft_at,
                             solid_at,
-                            soft_first,
+                            (soft_first, s.pairs),
                             cap,
                             &mut contacts,
                         );
