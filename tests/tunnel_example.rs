@@ -2,7 +2,8 @@
 //! at 10× the cannonball's speed against a wall a tenth of the ball's diameter thick tunnel
 //! through it under the discrete exact test; with `ContinuousCollision` every shot the
 //! sub-stepped reference sees touching the wall is detected, in the reference's frame, never
-//! later, and none is invented; with ADB pairs and the conservative time-critical continuous
+//! later, and none is invented (also with the wall a `Deformable`, swept with the deforming
+//! query); with ADB pairs and the conservative time-critical continuous
 //! query the same holds at the plugin's default budget and at a tight work budget. Bad
 //! arguments are errors.
 #[path = "../examples/support/mod.rs"]
@@ -36,6 +37,10 @@ fn continuous_collision_catches_every_shot_the_discrete_test_lets_through() {
     assert_eq!(r.continuous.false_hits, 0, "{r}");
     assert_eq!(r.discrete.false_hits, 0, "{r}");
     assert_eq!(r.late, 0, "{r}");
+    // The wall made a deformable: the deforming continuous query catches the same shots.
+    assert_eq!(r.deformable.detected, r.crossing, "{r}");
+    assert_eq!(r.deformable.same_run, r.crossing, "{r}");
+    assert_eq!(r.deformable.false_hits, 0, "{r}");
     assert!(
         r.worst_time_error <= 2.0 / support::tunnel::REFERENCE_SUBSTEPS as f32,
         "{r}"

@@ -1,8 +1,9 @@
 //! Tunnel: cannonball shots at a multiple of their speed against a wall a tenth of the ball's
 //! diameter thick, with the discrete exact test and with continuous collision
-//! (`ContinuousCollision`): exact, and ADB pairs with the time-critical continuous query
-//! (conservative and estimating, within a work budget; conservative at the plugin's default
-//! time budget), each against a reference that sub-steps every frame with the exact query. The
+//! (`ContinuousCollision`): exact (the wall rigid, and a `Deformable`, whose swept pairs get
+//! the deforming query), and ADB pairs with the time-critical continuous query (conservative
+//! and estimating, within a work budget; conservative at the plugin's default time budget),
+//! each against a reference that sub-steps every frame with the exact query. The
 //! `tunnel` example's run ([`run`]) and its side view ([`picture`]).
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -189,6 +190,9 @@ pub struct Setup {
     pub budget_us: u64,
     /// `CollisionConfig::continuous_adb_conservative`.
     pub conservative: bool,
+    /// The wall a `Deformable` (still): swept pairs get the deforming query, both meshes'
+    /// vertices on straight lines in world coordinates.
+    pub deformable_wall: bool,
 }
 
 impl Setup {
@@ -200,6 +204,7 @@ impl Setup {
             node_budget: None,
             budget_us: 0,
             conservative: true,
+            deformable_wall: false,
         }
     }
 }
@@ -228,11 +233,15 @@ pub fn fly_shots(args: &Args, setup: Setup) -> Flight {
         .add_systems(PostUpdate, stop_at_wall.in_set(CollisionSystems::Response));
     let world = app.world_mut();
     world.resource_mut::<ContactQueue>().enable();
-    world.spawn((
-        MeshCollider::new(wall_mesh()),
-        ColliderPose(wall_pose()),
-        fidelity,
-    ));
+    if setup.deformable_wall {
+        world.spawn((Deformable::new(wall_mesh()), ColliderPose(wall_pose())));
+    } else {
+        world.spawn((
+            MeshCollider::new(wall_mesh()),
+            ColliderPose(wall_pose()),
+            fidelity,
+        ));
+    }
     let ball = MeshCollider::new(ball_mesh());
     for (index, (start, velocity)) in shots(args).into_iter().enumerate() {
         let mut e = world.spawn((
@@ -331,6 +340,10 @@ pub struct Report {
     pub continuous_ms: f64,
     pub swept_pairs: u64,
     pub caught_by_sweep: u64,
+    /// The continuous exact run with the wall a `Deformable`.
+    pub deformable: Verdicts,
+    pub deformable_ms: f64,
+    pub deformable_swept_pairs: u64,
     pub reference_s: f64,
     /// Largest difference between the continuous run's time of impact and the reference's,
     /// in frames, over the shots both found in the same run.
@@ -388,6 +401,13 @@ pub fn run(args: &Args) -> Report {
     let reference_s = t.elapsed().as_secs_f64();
     let discrete = fly_shots(args, Setup::exact(None));
     let continuous = fly_shots(args, Setup::exact(Some(ContinuousCollision::Always)));
+    let deformable = fly_shots(
+        args,
+        Setup {
+            deformable_wall: true,
+            ..Setup::exact(Some(ContinuousCollision::Always))
+        },
+    );
     let adb = |name: String, node_budget: Option<u64>, conservative: bool| {
         let setup = Setup {
             continuous: Some(ContinuousCollision::Always),
@@ -395,6 +415,7 @@ pub fn run(args: &Args) -> Report {
             node_budget,
             budget_us: 2000,
             conservative,
+            deformable_wall: false,
         };
         let flight = fly_shots(args, setup);
         let late = flight
@@ -456,6 +477,9 @@ pub fn run(args: &Args) -> Report {
         continuous_ms: continuous.collision_ms,
         swept_pairs: continuous.swept_pairs,
         caught_by_sweep: continuous.caught_by_sweep,
+        deformable: verdicts(&deformable, &reference),
+        deformable_ms: deformable.collision_ms,
+        deformable_swept_pairs: deformable.swept_pairs,
         reference_s,
         worst_time_error,
         late,
@@ -505,6 +529,18 @@ impl fmt::Display for Report {
             self.worst_time_error,
             1.0 / REFERENCE_SUBSTEPS as f32,
             self.late
+        )?;
+        let v = self.deformable;
+        writeln!(
+            f,
+            "  continuous (exact, the wall a Deformable: both meshes' vertices on straight lines in world coordinates): detected {} of {} ({} in the reference's frame), {} tunnelled, {} false; {} pairs swept; collision stages {:.1} ms in all",
+            v.detected,
+            self.crossing,
+            v.same_run,
+            self.crossing - v.detected,
+            v.false_hits,
+            self.deformable_swept_pairs,
+            self.deformable_ms
         )?;
         for r in &self.adb {
             writeln!(
