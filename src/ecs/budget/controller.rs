@@ -37,6 +37,9 @@ pub struct RunPlan {
     pub waiting_quota: usize,
     /// When the trackers stop searching, from the run's start (`None`: no tracking ran).
     pub tracking_deadline: Option<Duration>,
+    /// How far before the target that deadline was moved: what the trackers' steps went on
+    /// for past their deadline in the runs before (moving average).
+    pub tracking_overrun: Duration,
 }
 
 /// How many tests the narrow phase runs and until when, as planned by
@@ -94,8 +97,10 @@ pub(crate) struct RunEnd {
 ///   least a sixteenth of the budget, so that something always settles); ADB tests share the
 ///   node pairs the measured rate gets done in that time by priority; the pairs waiting for a
 ///   test that a run takes in are about twice what it can test, oldest first, so none starves;
-/// - the **trackers** stop searching at the target less what Report took last time (no
-///   earlier than a sixteenth of the budget after they start).
+/// - the **trackers** stop searching at the target less what Report took last time and less
+///   what their steps went on for past that deadline in the runs before (a step cut at its
+///   deadline still finishes an eighth of its searches; moving average, at most a quarter of
+///   the budget), no earlier than a sixteenth of the budget after they start.
 ///
 /// Pairs not tested keep their last answer, one run older, with a confidence that decays with
 /// the motion since it was computed ([`PairView`](crate::ecs::PairView)); they wait for a test.
@@ -118,6 +123,10 @@ pub struct BudgetController {
     /// The Report stage's time in the last run.
     report_time: Duration,
     narrow_end: Option<Instant>,
+    /// When the last tracking stage of the run (self-collision or tracking) ended.
+    tracking_end: Option<Instant>,
+    /// What the trackers' steps went on for past their deadline (moving average).
+    tracking_overrun: Duration,
     costs: PairCosts,
     rate: WorkRate,
     /// Node pairs of the exact tests per run (moving average): not in the ADB share.
@@ -162,6 +171,8 @@ impl BudgetController {
             after_narrow: Duration::ZERO,
             report_time: Duration::ZERO,
             narrow_end: None,
+            tracking_end: None,
+            tracking_overrun: Duration::ZERO,
             costs: PairCosts::default(),
             rate: WorkRate::default(),
             exact_node_pairs: 0.0,
@@ -231,14 +242,19 @@ impl BudgetController {
         self.run_start = self.clock.now();
         self.stage_times = [Duration::ZERO; 8];
         self.narrow_end = None;
+        self.tracking_end = None;
         self.plan = RunPlan::default();
         self.run
     }
 
     /// Adds the time from `start` to now to `stage` in this run and returns it.
     pub(crate) fn stage_done(&mut self, stage: Stage, start: Instant) -> Duration {
-        let time = self.clock.now().saturating_duration_since(start);
+        let now = self.clock.now();
+        let time = now.saturating_duration_since(start);
         self.stage_times[stage as usize] += time;
+        if matches!(stage, Stage::SelfCollision | Stage::Tracking) {
+            self.tracking_end = Some(now);
+        }
         time
     }
 
@@ -318,16 +334,22 @@ impl BudgetController {
     }
 
     /// When the trackers of this run stop searching under `budget` (`None`: no time budget):
-    /// the run's target less what the Report stage took last time, but no earlier than a
-    /// sixteenth of the budget from now (without any search nothing converges).
+    /// the run's target less what the Report stage took last time and less what the trackers
+    /// went on for past their deadline before, but no earlier than a sixteenth of the budget
+    /// from now (without any search nothing converges).
     pub(crate) fn tracking_deadline(&mut self, budget: FrameBudget) -> Option<Instant> {
         let FrameBudget::Time(budget) = budget else {
             return None;
         };
         let now = self.clock.now();
-        let end = self.run_start + self.time_target(budget).saturating_sub(self.report_time);
+        let end = self.run_start
+            + self
+                .time_target(budget)
+                .saturating_sub(self.report_time)
+                .saturating_sub(self.tracking_overrun);
         let deadline = end.max(now + budget / 16);
         self.plan.tracking_deadline = Some(deadline.saturating_duration_since(self.run_start));
+        self.plan.tracking_overrun = self.tracking_overrun;
         Some(deadline)
     }
 
@@ -344,6 +366,14 @@ impl BudgetController {
             None => after_stages,
         };
         let mut overran = false;
+        if let (FrameBudget::Time(b), Some(deadline)) = (budget, self.plan.tracking_deadline) {
+            // What the trackers did past their deadline (0 when they ended before it).
+            let past = self.tracking_end.map_or(Duration::ZERO, |end| {
+                end.saturating_duration_since(self.run_start + deadline)
+            });
+            self.tracking_overrun = self.tracking_overrun.mul_f64(0.8) + past.mul_f64(0.2);
+            self.tracking_overrun = self.tracking_overrun.min(b / 4);
+        }
         if let FrameBudget::Time(b) = budget {
             // Up by half the overrun and a fiftieth of the budget, down by a thousandth of
             // the budget per run within it: in balance, about one run in forty goes over, and
@@ -427,6 +457,42 @@ mod tests {
         // The trackers stop where the report's time begins.
         let deadline = c.tracking_deadline(budget).unwrap();
         assert_eq!(deadline - c.run_start, Duration::from_micros(1600));
+    }
+
+    /// Trackers that go on past their deadline have it moved earlier by about as much in the
+    /// runs after; when they stop going over, it moves back.
+    #[test]
+    fn the_trackers_deadline_moves_earlier_by_what_they_ran_past_it() {
+        let (mut c, clock) = controller();
+        let budget = FrameBudget::Time(ms(2));
+        let run = |c: &mut BudgetController, past: Duration| {
+            c.begin_run(false);
+            let start = c.now();
+            let deadline = c.tracking_deadline(budget).unwrap();
+            clock.advance((deadline - start) + past);
+            c.stage_done(Stage::SelfCollision, start);
+            c.end_run(budget);
+            deadline - c.run_start
+        };
+        let first = run(&mut c, Duration::from_micros(300));
+        assert_eq!(first, ms(2));
+        let mut last = first;
+        for _ in 0..40 {
+            last = run(&mut c, Duration::from_micros(300));
+        }
+        // The overrun is learnt (the margin grows with the frames' overruns too).
+        assert!(c.plan().tracking_overrun > Duration::from_micros(290));
+        assert!(last <= first - Duration::from_micros(290), "{last:?}");
+        // Never more than a quarter of the budget.
+        for _ in 0..40 {
+            run(&mut c, ms(10));
+        }
+        assert_eq!(c.plan().tracking_overrun, Duration::from_micros(500));
+        // Trackers that stop in time bring it back.
+        for _ in 0..100 {
+            run(&mut c, Duration::ZERO);
+        }
+        assert!(c.plan().tracking_overrun < Duration::from_micros(5));
     }
 
     #[test]
