@@ -3,13 +3,13 @@
 //! Random rigid motions of pairs of meshes over one step (one mesh flying across the other's
 //! neighbourhood, turning or not; the other moving a little and turning), each answered by the
 //! exact continuous query (`ccd::time_of_impact`, the reference) and by `adb_time_of_impact`
-//! under node budgets of 10, 30, 100 and 300 node pairs: the estimating query (probability of
+//! under node budgets of 3, 10, 30, 100 and 300 node pairs: the estimating query (probability of
 //! a contact during the step from the swept answer model, "collision" from ½; beside it the
 //! node pairs' estimates combined as the discrete query does, its confidence before the model)
 //! and the conservative one. Meshes: generated
 //! shapes (a ball, a thin wall, a torus, a seeded random tube and spiky sphere) and, when the
-//! shared meshes are present, Spot and Suzanne, none of them the ADB defaults' training
-//! meshes; motions from `--seed`. Prints, per budget, how many answers the budget cut short,
+//! shared meshes are present, Spot and Suzanne, none of them a training mesh of the ADB
+//! defaults or of the swept answer model (`fit_swept_answer_model`); motions from `--seed`. Prints, per budget, how many answers the budget cut short,
 //! the estimating query's errors (missed and false contacts), its Brier score over all answers
 //! and over the cut ones, the observed frequency of contact per bin of reported probability,
 //! and the conservative query's misses (always 0) and false contacts; writes the reliability

@@ -8,8 +8,8 @@
 //! uses: a plank, a capped tube, an open sheet, a coarse spiky ball and a small one, a large
 //! thin slab and a large sheet), each mesh against each and, half as many again, a small mesh
 //! flying past a large one, on the seeds `TRAINING_SEEDS`, each answered by the
-//! exact continuous query and by the estimating query under node budgets of 10, 30, 100 and
-//! 300; every answer cut short with node pairs left (and no contact found) is a sample. The
+//! exact continuous query and by the estimating query under node budgets of 3, 10, 30, 100
+//! and 300; every answer cut short with node pairs left (and no contact found) is a sample. The
 //! report `continuous_adb_reliability` evaluates the model on other meshes and seeds.
 //!
 //! Prints the weights (paste them into `src/ccd/swept_answer_model.rs`) and, on the training
@@ -21,8 +21,8 @@
 #[allow(dead_code)]
 #[path = "support/mesh_pairs.rs"]
 mod mesh_pairs;
-// Only its `cases_between` is used here.
 mod support;
+// Only its `cases_between` is used here.
 #[allow(dead_code)]
 #[path = "support/swept_cases.rs"]
 mod swept_cases;
