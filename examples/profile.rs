@@ -48,7 +48,7 @@ use plotters::prelude::*;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use stochastic_collision::bvh::{QueryWorkspace, intersects};
-use stochastic_collision::ecs::{ColliderTable, ContactQueue, PairTable, Stage};
+use stochastic_collision::ecs::{ColliderTable, CollisionCounters, ContactQueue, PairTable, Stage};
 use stochastic_collision::prelude::*;
 use support::{Options, Scene, tally};
 
@@ -118,6 +118,9 @@ struct FrameRecord {
     /// Pairs in the table and pairs worked on in the frame.
     pairs: usize,
     active: usize,
+    /// The diagnostics' counters after the frame (the frame's work is the difference from the
+    /// frame before).
+    counters: CollisionCounters,
 }
 
 fn main() {
@@ -166,6 +169,7 @@ fn main() {
             collision_us: d.collision_time.as_secs_f64() * 1e6,
             pairs: world.resource::<PairTable>().len(),
             active: world.resource::<PairTable>().active_pairs(),
+            counters: d.counters,
         });
         // Agreement: a few pairs per frame whose world boxes overlap (every such pair has an
         // answer, worked on in this frame or still holding from an earlier one), re-tested
@@ -443,7 +447,10 @@ fn frames_csv(records: &[FrameRecord]) -> String {
     for s in Stage::ALL {
         let _ = write!(out, ",{}_us", s.name());
     }
-    out.push_str(",collision_us,pairs,active_pairs\n");
+    out.push_str(
+        ",collision_us,pairs,active_pairs,tested_pairs,exact_pairs,confirmed_pairs,node_pairs\n",
+    );
+    let mut before = CollisionCounters::default();
     for (i, r) in records.iter().enumerate() {
         let _ = write!(out, "{i}");
         for t in &r.stages {
@@ -454,7 +461,19 @@ fn frames_csv(records: &[FrameRecord]) -> String {
                 None => out.push(','),
             }
         }
-        let _ = writeln!(out, ",{:.1},{},{}", r.collision_us, r.pairs, r.active);
+        let c = &r.counters;
+        let _ = writeln!(
+            out,
+            ",{:.1},{},{},{},{},{},{}",
+            r.collision_us,
+            r.pairs,
+            r.active,
+            c.tested_pairs - before.tested_pairs,
+            c.exact_pairs - before.exact_pairs,
+            c.confirmed_pairs - before.confirmed_pairs,
+            c.node_pairs - before.node_pairs,
+        );
+        before = *c;
     }
     out
 }

@@ -68,12 +68,16 @@ pub fn setup(app: &mut App, options: &Options) {
     world.insert_resource(PileBox { half: layout.half });
     // Subdivided, so that its tree has small leaves (a few huge triangles make every exact
     // test against it slow). The box is static level geometry: tested exactly (cheap, and
-    // nothing may fall through it); the bodies among themselves use the default fidelity.
+    // nothing may fall through it), on a layer of its own that does not collide with itself
+    // (the walls stand on the floor and meet at the corners: nothing would act on those
+    // contacts, and avian never pairs two static bodies); the bodies among themselves use the
+    // default fidelity.
     for (h, at) in &layout.slabs {
         world.spawn((
             MeshCollider::new(generate::cuboid(*h, 12)),
             ColliderPose::from_translation(*at),
             Fidelity::Exact,
+            layout::LEVEL_LAYERS,
         ));
     }
     let kinds = body_kinds();

@@ -2,7 +2,7 @@
 //! diameter thick, with the discrete exact test and with continuous collision
 //! (`ContinuousCollision`): exact (the wall rigid, and a `Deformable`, whose swept pairs get
 //! the deforming query), and ADB pairs with the time-critical continuous query (conservative
-//! and estimating, within a work budget; conservative at the plugin's default time budget),
+//! and estimating, within a work budget and at the plugin's default time budget),
 //! each against a reference that sub-steps every frame with the exact query. The
 //! `tunnel` example's run ([`run`]) and its side view ([`picture`]).
 use std::fmt;
@@ -448,6 +448,11 @@ pub fn run(args: &Args) -> Report {
             format!("continuous (ADB, conservative, {n} node pairs per run)"),
             Some(n),
             true,
+        ),
+        adb(
+            "continuous (ADB, estimating, the default 2000 µs budget)".to_owned(),
+            None,
+            false,
         ),
         adb(
             format!("continuous (ADB, estimating, {n} node pairs per run)"),

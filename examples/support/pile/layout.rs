@@ -4,7 +4,12 @@
 //! avian3d includes this file by path, so both engines get the same scene.
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
-use stochastic_collision::prelude::{Quat, TriMesh, Vec3};
+use stochastic_collision::prelude::{ContactLayers, Quat, TriMesh, Vec3};
+
+/// The box's slabs' layers: members of a layer of their own (the highest bit) that collide
+/// with every other layer but that one, so the bodies (all layers, the default) hit the
+/// slabs and the slabs never pair with each other.
+pub const LEVEL_LAYERS: ContactLayers = ContactLayers::new(1 << 31, !(1 << 31));
 
 /// How a body starts.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -26,7 +26,7 @@ use bevy::time::TimeUpdateStrategy;
 #[path = "../../../examples/support/pile/layout.rs"]
 mod layout;
 
-use layout::{normalized, pile_layout};
+use layout::{LEVEL_LAYERS, normalized, pile_layout};
 use stochastic_collision::ecs::{ImpulseSettings, Rest, Stage};
 use stochastic_collision::prelude::{
     BodyInertia, BodyMass, BodyVelocity, ColliderPose, CollisionConfig, CollisionDiagnostics,
@@ -216,6 +216,7 @@ pub fn our_app(scene: &PileScene) -> App {
             MeshCollider::new(mesh.clone()),
             ColliderPose::from_translation(*at),
             Fidelity::Exact,
+            LEVEL_LAYERS,
         ));
     }
     let colliders: Vec<MeshCollider> = scene

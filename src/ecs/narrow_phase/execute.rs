@@ -362,7 +362,7 @@ impl Context<'_> {
         s: &mut Scratch,
     ) {
         let settings = (
-            self.adb_budget(job, s),
+            self.sweep_budget(job, s),
             self.config.adb_collide_at,
             self.config.continuous_adb_conservative,
         );
@@ -373,6 +373,23 @@ impl Context<'_> {
         o.budget_exhausted |= swept.budget_exhausted;
         if let Some(hit) = swept.contact {
             take_swept(o, hit, swept.probability, s);
+        }
+    }
+
+    /// The node pairs the continuous test of ADB pair `job` may visit in this run. Under a
+    /// time budget: the largest slice (`CollisionConfig::max_slice`) that the time left
+    /// allows, and an eighth of it even past the deadline, since a swept pair cannot wait
+    /// for a later run (what its motion crossed has passed by then) and a search cut after a
+    /// few node pairs can only guess (swept pairs are few: only colliders with
+    /// `ContinuousCollision` that moved). Under a work budget: its share, as for its
+    /// discrete test (the work stays what the budget says).
+    fn sweep_budget(&self, job: &Job, s: &Scratch) -> Budget {
+        match (self.share, self.deadlines.others) {
+            (Some(_), Some(_)) => {
+                let max = self.config.max_slice.max(self.config.min_slice);
+                Budget::NodePairs(max.min(s.node_cap).max(max / 8))
+            }
+            _ => self.adb_budget(job, s),
         }
     }
 
