@@ -5,7 +5,9 @@
 //! impulse response sends the ball back from the wall. `WhenFast` sweeps only fast motion.
 //! With ADB fidelity the pair is swept with the time-critical continuous query: exact without
 //! a budget, and under a budget too small to settle it the conservative query still reports
-//! the crossing, never later than it happens.
+//! the crossing, never later than it happens; under a time budget whose deadline has always
+//! passed, the swept pair still gets enough node pairs to settle, and the estimating query
+//! reports the crossing exactly.
 #![cfg(feature = "transform")]
 mod plugin_support;
 
@@ -13,7 +15,9 @@ use bevy_app::prelude::*;
 use bevy_ecs::prelude::*;
 use bevy_transform::components::Transform;
 use plugin_support::*;
-use stochastic_collision::ecs::{DEFAULT_STEP, ImpulseSettings};
+use std::time::Duration;
+
+use stochastic_collision::ecs::{BudgetController, DEFAULT_STEP, FakeClock, ImpulseSettings};
 use stochastic_collision::prelude::*;
 
 const RADIUS: f32 = 0.15;
@@ -186,4 +190,45 @@ fn adb_pairs_are_swept_with_the_time_critical_query() {
             assert!(t >= (-(WALL_HALF + RADIUS) + 2.0) / travel - 1e-4, "{t}");
         }
     }
+}
+
+/// Under a time budget, a swept ADB pair tested past the run's deadline (a clock that moves a
+/// millisecond at every reading: every deadline has passed when the tests start) still gets an
+/// eighth of `max_slice` for its continuous test: enough to settle a ball against a wall, so
+/// the estimating query reports the crossing exactly (probability 1, the path's time of
+/// impact), once.
+#[test]
+fn a_swept_adb_pair_past_its_deadline_still_settles() {
+    let travel = SPEED * DEFAULT_STEP;
+    let (mut app, _) = adb_scene(
+        Some(ContinuousCollision::Always),
+        START,
+        SPEED,
+        false,
+        Fidelity::Adb { p_min: 0.99 },
+    );
+    {
+        let world = app.world_mut();
+        let mut config = world.resource_mut::<CollisionConfig>();
+        config.budget = FrameBudget::Time(Duration::from_micros(200));
+        config.continuous_adb_conservative = false;
+        world
+            .resource_mut::<BudgetController>()
+            .set_clock(FakeClock::ticking(Duration::from_millis(1)));
+    }
+    steps(&mut app, 6);
+    let d = app.world().resource::<CollisionDiagnostics>().counters;
+    assert!(d.swept_pairs >= 1, "{d:?}");
+    assert!(d.overrun_runs >= 1, "every run is over its budget: {d:?}");
+    let starts = &app.world().resource::<Starts>().0;
+    assert_eq!(starts.len(), 1, "one contact: {starts:?}");
+    let s = starts[0];
+    assert_eq!(s.probability, 1.0, "settled: {s:?}");
+    let t = s.time_of_impact.expect("a time of impact");
+    let first = (-(WALL_HALF + RADIUS) + 2.0) / travel;
+    let latest = (-(WALL_HALF + 0.9 * RADIUS) + 2.0) / travel;
+    assert!(
+        t >= first - 1e-4 && t <= latest,
+        "{t} not in [{first}, {latest}]"
+    );
 }

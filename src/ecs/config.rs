@@ -105,7 +105,9 @@ pub struct CollisionConfig {
     /// (the pairs tested were chosen by what a test costs; one cut short would be wasted),
     /// less only when the tests' deadline is that close.
     pub min_slice: u64,
-    /// Node pairs an ADB pair gets at most, however generous the budget.
+    /// Node pairs an ADB pair gets at most, however generous the budget. The continuous test
+    /// of a swept ADB pair (`ContinuousCollision`) gets, under a time budget, this much as far
+    /// as the time left allows, and an eighth of it even past the deadline.
     pub max_slice: u64,
     /// Seed of all randomness (per pair: `(seed, frame, entities)`), so results do not depend on
     /// thread scheduling.

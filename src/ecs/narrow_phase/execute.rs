@@ -378,16 +378,17 @@ impl Context<'_> {
 
     /// The node pairs the continuous test of ADB pair `job` may visit in this run. Under a
     /// time budget: the largest slice (`CollisionConfig::max_slice`) that the time left
-    /// allows, and an eighth of it even past the deadline, since a swept pair cannot wait
-    /// for a later run (what its motion crossed has passed by then) and a search cut after a
-    /// few node pairs can only guess (swept pairs are few: only colliders with
-    /// `ContinuousCollision` that moved). Under a work budget: its share, as for its
-    /// discrete test (the work stays what the budget says).
+    /// allows, and an eighth of it (at least `min_slice`) even past the deadline, since a
+    /// swept pair cannot wait for a later run (what its motion crossed has passed by then)
+    /// and a search cut after a few node pairs can only guess (swept pairs are few: only
+    /// colliders with `ContinuousCollision` that moved). Under a work budget: its share, as
+    /// for its discrete test (the work stays what the budget says).
     fn sweep_budget(&self, job: &Job, s: &Scratch) -> Budget {
         match (self.share, self.deadlines.others) {
             (Some(_), Some(_)) => {
                 let max = self.config.max_slice.max(self.config.min_slice);
-                Budget::NodePairs(max.min(s.node_cap).max(max / 8))
+                let floor = (max / 8).max(self.config.min_slice);
+                Budget::NodePairs(max.min(s.node_cap).max(floor))
             }
             _ => self.adb_budget(job, s),
         }
