@@ -6,8 +6,9 @@
 //!
 //! New pairs are found by sweep and prune over the fat boxes, kept sorted along one axis from
 //! run to run (an insertion sort, linear when little moved) and split into lanes along a
-//! second axis; a sweep runs only in runs where some fat box moved, and reports only pairs
-//! with a moved box that do not exist yet.
+//! second axis; a sweep runs only in runs where some fat box moved, goes from the moved boxes
+//! (each against its neighbours along the sweep axis), and reports only pairs with a moved box
+//! that do not exist yet.
 //!
 //! Invariant (checked by `tests/plugin_pair_table.rs` against brute force): the
 //! [`PairTable`] holds a pair for every two valid colliders whose world boxes overlap and
@@ -30,21 +31,47 @@ use super::stamp::{age_stamp, stamp, stamp_sweep_due};
 use crate::geometry::Aabb;
 use sweep::{SweepBox, find_near_moved, sort_order, sweep};
 
+/// One collider slot in the broad phase: everything a sweep or a windowed search reads of it,
+/// in one 64-byte record, so that a search visiting the boxes in sorted order (scattered slots)
+/// loads one record per box rather than one array element per field.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Proxy {
+    /// The fat box.
+    fat: Aabb,
+    /// The fat box before this run's move ([`Aabb::EMPTY`] when new or refiltered: its pairs
+    /// are not known from it).
+    old_fat: Aabb,
+    layers: ContactLayers,
+    /// The run its fat box was last set in (a stamp).
+    moved_run: u32,
+    /// Whether the slot is in the broad phase.
+    present: bool,
+    /// Whether the slot is in `order` (a removed one stays there until the next sweep).
+    listed: bool,
+}
+
+const _: () = assert!(std::mem::size_of::<Proxy>() == 64);
+
+impl Default for Proxy {
+    fn default() -> Self {
+        Self {
+            fat: Aabb::EMPTY,
+            old_fat: Aabb::EMPTY,
+            layers: ContactLayers::ALL,
+            moved_run: 0,
+            present: false,
+            listed: false,
+        }
+    }
+}
+
 /// The broad phase's persistent state: every collider's fat box, their sorted order, and
 /// reused buffers.
 #[derive(Resource, Debug, Default)]
 pub struct BroadPhaseState {
-    /// Per collider slot: its fat box, layers, the run its fat box was last set in (a stamp),
-    /// and whether it is in the broad phase.
-    fat: Vec<Aabb>,
-    /// The fat box before this run's move ([`Aabb::EMPTY`] when new or refiltered: its pairs
-    /// are not known from it).
-    old_fat: Vec<Aabb>,
-    layers: Vec<ContactLayers>,
-    moved_run: Vec<u32>,
-    present: Vec<bool>,
-    /// Whether the slot is in `order` (a removed one stays there until the next sweep).
-    listed: Vec<bool>,
+    /// Per collider slot: its fat box, layers, the run its fat box was last set in, and
+    /// whether it is in the broad phase.
+    proxies: Vec<Proxy>,
     /// The slots in the broad phase, sorted by their fat box's lower bound along `axis`, and
     /// per sorted position the box's bounds along `axis` (for windowed searches).
     order: Vec<u32>,
@@ -60,17 +87,18 @@ pub struct BroadPhaseState {
     axis: usize,
     second: usize,
     /// Reused buffers: the colliders whose fat box moved in this run, the pairs to drop, the
-    /// lanes' boxes, the new pairs found per lane.
+    /// lanes' boxes and their moved boxes, the new pairs found per lane.
     moved: Vec<u32>,
     dropped: Vec<u32>,
     lanes: Vec<Vec<SweepBox>>,
+    lanes_moved: Vec<Vec<u32>>,
     found: Vec<Vec<(u32, u32)>>,
 }
 
 impl BroadPhaseState {
     /// Number of colliders in the broad phase.
     pub fn len(&self) -> usize {
-        self.present.iter().filter(|&&p| p).count()
+        self.proxies.iter().filter(|p| p.present).count()
     }
 
     /// Whether no collider is in the broad phase.
@@ -82,23 +110,14 @@ impl BroadPhaseState {
     /// same world's [`ColliderTable`]).
     pub fn fat_box(&self, colliders: &ColliderTable, entity: Entity) -> Option<Aabb> {
         let i = colliders.slot_of(entity)? as usize;
-        self.present
-            .get(i)
-            .copied()
-            .unwrap_or(false)
-            .then(|| self.fat[i])
+        self.proxies.get(i).filter(|p| p.present).map(|p| p.fat)
     }
 
     /// Makes room for slot `i`.
     fn grow_to(&mut self, i: u32) {
         let n = i as usize + 1;
-        if self.fat.len() < n {
-            self.fat.resize(n, Aabb::EMPTY);
-            self.old_fat.resize(n, Aabb::EMPTY);
-            self.layers.resize(n, ContactLayers::ALL);
-            self.moved_run.resize(n, 0);
-            self.present.resize(n, false);
-            self.listed.resize(n, false);
+        if self.proxies.len() < n {
+            self.proxies.resize(n, Proxy::default());
         }
     }
 }
@@ -119,14 +138,16 @@ pub fn update_broad_phase(
     let (colliders, pairs, state) = (&mut *colliders, &mut *pairs, &mut *state);
     pairs.begin_run(run);
     if stamp_sweep_due(run) {
-        for s in &mut state.moved_run {
-            age_stamp(s, now);
+        for p in &mut state.proxies {
+            age_stamp(&mut p.moved_run, now);
         }
     }
     // Removed colliders: their pairs go (touching pairs end), then their slots.
     for (slot, entry) in std::mem::take(&mut colliders.removed) {
-        if state.present.get(slot as usize).copied().unwrap_or(false) {
-            state.present[slot as usize] = false;
+        if let Some(p) = state.proxies.get_mut(slot as usize)
+            && p.present
+        {
+            p.present = false;
             state.removed += 1;
         }
         for &p in entry.pair_slots() {
@@ -151,29 +172,25 @@ pub fn update_broad_phase(
         state.grow_to(i);
         let e = colliders.entry(i);
         let refilter = e.filter_run == run;
-        let slot = i as usize;
-        if !state.present[slot] {
+        let p = &mut state.proxies[i as usize];
+        if !p.present {
             // A new collider's fat box is its world box: one that never moves (level
             // geometry) stays as tight as it can be.
-            state.old_fat[slot] = Aabb::EMPTY;
-            state.fat[slot] = e.aabb;
-            state.present[slot] = true;
-            if !state.listed[slot] {
-                state.listed[slot] = true;
+            p.old_fat = Aabb::EMPTY;
+            p.fat = e.aabb;
+            p.present = true;
+            if !p.listed {
+                p.listed = true;
                 state.added.push(i);
             }
-        } else if refilter || !contains(&state.fat[slot], &e.aabb) {
-            state.old_fat[slot] = if refilter {
-                Aabb::EMPTY
-            } else {
-                state.fat[slot]
-            };
-            state.fat[slot] = fat_box(e, config.proxy_margin);
+        } else if refilter || !contains(&p.fat, &e.aabb) {
+            p.old_fat = if refilter { Aabb::EMPTY } else { p.fat };
+            p.fat = fat_box(e, config.proxy_margin);
         } else {
             continue;
         }
-        state.layers[slot] = e.layers;
-        state.moved_run[slot] = now;
+        p.layers = e.layers;
+        p.moved_run = now;
         state.moved.push(i);
         if refilter {
             update_self_pair(colliders, pairs, i, run);
@@ -199,10 +216,8 @@ fn drop_parted(colliders: &mut ColliderTable, pairs: &mut PairTable, state: &mut
             if other == i {
                 continue;
             }
-            let (a, b) = (i as usize, other as usize);
-            if !state.fat[a].intersects(&state.fat[b])
-                || !state.layers[a].interacts_with(&state.layers[b])
-            {
+            let (a, b) = (&state.proxies[i as usize], &state.proxies[other as usize]);
+            if !a.fat.intersects(&b.fat) || !a.layers.interacts_with(&b.layers) {
                 state.dropped.push(p);
             }
         }

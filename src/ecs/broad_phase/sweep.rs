@@ -9,6 +9,11 @@ use super::{BroadPhaseState, linked};
 use crate::geometry::Aabb;
 
 /// Finds the new pairs of the moved boxes by sweep and prune over every fat box, in lanes.
+///
+/// Only a pair with a moved box can be new, so each lane is swept from its moved boxes: each
+/// moved box against the boxes after it in sorted order that start within its extent, and
+/// each box that did not move against the moved boxes after it that do. The work follows the
+/// moved boxes and their neighbours, not every overlapping pair of the lane.
 pub(super) fn sweep(
     colliders: &ColliderTable,
     pairs: &PairTable,
@@ -21,12 +26,12 @@ pub(super) fn sweep(
     // a box is in every lane it covers, and a pair is reported in the first lane both are in.
     // Far fewer boxes overlap along the sweep axis within a lane than in the whole world.
     let (axis, second) = (state.axis, state.second);
-    let fat = &state.fat;
+    let proxies = &state.proxies;
     let (lo, hi) = state
         .order
         .iter()
         .fold((f32::MAX, f32::MIN), |(lo, hi), &i| {
-            let b = &fat[i as usize];
+            let b = &proxies[i as usize].fat;
             (lo.min(b.min[second]), hi.max(b.max[second]))
         });
     let lanes = ((state.order.len() as f32).sqrt() as usize / 2).clamp(1, 32);
@@ -34,44 +39,84 @@ pub(super) fn sweep(
     let lane = |v: f32| (((v - lo) * scale).max(0.0) as usize).min(lanes - 1);
     state.lanes.resize_with(lanes, Vec::new);
     state.lanes.iter_mut().for_each(Vec::clear);
+    state.lanes_moved.resize_with(lanes, Vec::new);
+    state.lanes_moved.iter_mut().for_each(Vec::clear);
     for &i in &state.order {
-        let b = &fat[i as usize];
-        let (l0, l1) = (lane(b.min[second]), lane(b.max[second]));
-        for m in &mut state.lanes[l0..=l1] {
-            let moved = state.moved_run[i as usize] == now;
-            m.push(SweepBox {
-                aabb: *b,
-                old: if moved { state.old_fat[i as usize] } else { *b },
-                layers: state.layers[i as usize],
-                index: i,
-                first_lane: l0 as u32,
-                moved,
-            });
+        let p = &proxies[i as usize];
+        let (l0, l1) = (lane(p.fat.min[second]), lane(p.fat.max[second]));
+        let moved = p.moved_run == now;
+        let swept = SweepBox {
+            aabb: p.fat,
+            old: if moved { p.old_fat } else { p.fat },
+            layers: p.layers,
+            index: i,
+            first_lane: l0 as u16,
+            moved,
+        };
+        for l in l0..=l1 {
+            let members = &mut state.lanes[l];
+            if moved {
+                state.lanes_moved[l].push(members.len() as u32);
+            }
+            members.push(swept);
         }
     }
     let lane_ids: [u32; 32] = std::array::from_fn(|l| l as u32);
-    let (members, table, pair_table) = (&state.lanes, colliders, pairs);
+    let (members, moved_members) = (&state.lanes, &state.lanes_moved);
+    let (table, pair_table) = (colliders, pairs);
     pool.map_chunks_into(&lane_ids[..lanes], 1, &mut state.found, |ls, found| {
         for &l in ls {
-            let boxes = &members[l as usize];
-            for (k, bi) in boxes.iter().enumerate() {
-                let max = bi.aabb.max[axis];
-                for bj in &boxes[k + 1..] {
+            let (boxes, moved) = (&members[l as usize], &moved_members[l as usize]);
+            let first = found.len();
+            // Sorted positions `(k, m)`, `k` before `m`, of the lane's new pairs.
+            let mut consider = |k: usize, m: usize| {
+                let (bi, bj) = (&boxes[k], &boxes[m]);
+                // Boxes that overlapped before this run's moves have their pair already
+                // (pairs go only when the boxes part).
+                if u32::from(bi.first_lane.max(bj.first_lane)) == l
+                    && bi.aabb.intersects(&bj.aabb)
+                    && !bi.old.intersects(&bj.old)
+                    && bi.layers.interacts_with(&bj.layers)
+                    && !linked(table, pair_table, bi.index, bj.index)
+                {
+                    found.push((k as u32, m as u32));
+                }
+            };
+            // A moved box and the boxes after it that start within its extent.
+            for &k in moved {
+                let k = k as usize;
+                let max = boxes[k].aabb.max[axis];
+                for (m, bj) in boxes.iter().enumerate().skip(k + 1) {
                     if bj.aabb.min[axis] > max {
                         break;
                     }
-                    // Boxes that overlapped before this run's moves have their pair already
-                    // (pairs go only when the boxes part).
-                    if (bi.moved || bj.moved)
-                        && bi.first_lane.max(bj.first_lane) == l
-                        && bi.aabb.intersects(&bj.aabb)
-                        && !bi.old.intersects(&bj.old)
-                        && bi.layers.interacts_with(&bj.layers)
-                        && !linked(table, pair_table, bi.index, bj.index)
-                    {
-                        found.push((bi.index, bj.index));
-                    }
+                    consider(k, m);
                 }
+            }
+            // A box that did not move and the moved boxes after it that start within its
+            // extent (`next`: the first moved box after position `k`).
+            let mut next = 0;
+            for (k, bi) in boxes.iter().enumerate() {
+                while next < moved.len() && moved[next] as usize <= k {
+                    next += 1;
+                }
+                if bi.moved {
+                    continue;
+                }
+                let max = bi.aabb.max[axis];
+                for &m in &moved[next..] {
+                    if boxes[m as usize].aabb.min[axis] > max {
+                        break;
+                    }
+                    consider(k, m as usize);
+                }
+            }
+            // In sorted order of the first box, then the second (the order of a sweep over
+            // every pair of the lane), as slots.
+            let lane_found = &mut found[first..];
+            lane_found.sort_unstable();
+            for f in lane_found {
+                *f = (boxes[f.0 as usize].index, boxes[f.1 as usize].index);
             }
         }
     });
@@ -90,23 +135,24 @@ pub(super) fn find_near_moved(
     let now = stamp(run);
     let axis = state.axis;
     let (order, bounds, long, reach) = (&state.order, &state.bounds, &state.long, state.reach);
-    let (fat, old, layers, moved_run) =
-        (&state.fat, &state.old_fat, &state.layers, &state.moved_run);
+    let proxies = &state.proxies;
     let chunk = pool.chunk_size(state.moved.len(), 16);
     pool.map_chunks_into(&state.moved, chunk, &mut state.found, |moved, found| {
         for &i in moved {
-            let b = &fat[i as usize];
+            let pi = &proxies[i as usize];
+            let b = &pi.fat;
             let mut consider = |j: u32| {
                 if j == i {
                     return;
                 }
-                let (bj, j_moved) = (&fat[j as usize], moved_run[j as usize] == now);
+                let pj = &proxies[j as usize];
+                let (bj, j_moved) = (&pj.fat, pj.moved_run == now);
                 // Of two moved boxes, the one of the smaller slot reports.
-                let old_j = if j_moved { &old[j as usize] } else { bj };
+                let old_j = if j_moved { &pj.old_fat } else { bj };
                 if (j_moved && j < i)
                     || !b.intersects(bj)
-                    || old[i as usize].intersects(old_j)
-                    || !layers[i as usize].interacts_with(&layers[j as usize])
+                    || pi.old_fat.intersects(old_j)
+                    || !pi.layers.interacts_with(&pj.layers)
                     || linked(colliders, pairs, i, j)
                 {
                     return;
@@ -134,10 +180,11 @@ pub(super) fn find_near_moved(
 /// full sort, with the axes chosen again, when much is new).
 pub(super) fn sort_order(state: &mut BroadPhaseState) {
     if state.removed > 0 {
-        let (present, listed) = (&state.present, &mut state.listed);
+        let proxies = &mut state.proxies;
         state.order.retain(|&i| {
-            listed[i as usize] = present[i as usize];
-            present[i as usize]
+            let p = &mut proxies[i as usize];
+            p.listed = p.present;
+            p.present
         });
         state.removed = 0;
     }
@@ -146,15 +193,15 @@ pub(super) fn sort_order(state: &mut BroadPhaseState) {
     let mut order = std::mem::take(&mut state.order);
     if new * 4 > order.len() {
         choose_axes(state, &order);
-        let (fat, axis) = (&state.fat, state.axis);
+        let (proxies, axis) = (&state.proxies, state.axis);
         order.sort_unstable_by(|&x, &y| {
-            fat[x as usize].min[axis]
-                .total_cmp(&fat[y as usize].min[axis])
+            proxies[x as usize].fat.min[axis]
+                .total_cmp(&proxies[y as usize].fat.min[axis])
                 .then(x.cmp(&y))
         });
     } else {
-        let (fat, axis) = (&state.fat, state.axis);
-        let key = |i: u32| fat[i as usize].min[axis];
+        let (proxies, axis) = (&state.proxies, state.axis);
+        let key = |i: u32| proxies[i as usize].fat.min[axis];
         // Ties by slot (deterministic).
         for k in 1..order.len() {
             let mut j = k;
@@ -173,8 +220,11 @@ pub(super) fn sort_order(state: &mut BroadPhaseState) {
     }
     // The bounds along the axis per position; the long boxes apart (longer than 8 times the
     // median: searched for every moved box instead of widening every window).
-    let (fat, axis) = (&state.fat, state.axis);
-    let extent = |i: u32| fat[i as usize].max[axis] - fat[i as usize].min[axis];
+    let (proxies, axis) = (&state.proxies, state.axis);
+    let extent = |i: u32| {
+        let b = &proxies[i as usize].fat;
+        b.max[axis] - b.min[axis]
+    };
     let mut sample: Vec<f32> = order
         .iter()
         .step_by(order.len().div_ceil(64).max(1))
@@ -186,7 +236,7 @@ pub(super) fn sort_order(state: &mut BroadPhaseState) {
     state.long.clear();
     state.reach = 0.0;
     for &i in &order {
-        let b = &fat[i as usize];
+        let b = &proxies[i as usize].fat;
         let e = extent(i);
         if e > limit {
             state.long.push(i);
@@ -216,7 +266,7 @@ fn choose_axes(state: &mut BroadPhaseState, order: &[u32]) {
             order
                 .iter()
                 .step_by(step)
-                .map(|&i| state.fat[i as usize].center()[axis]),
+                .map(|&i| state.proxies[i as usize].fat.center()[axis]),
         );
         sample.sort_unstable_by(f32::total_cmp);
         let q = |f: f32| sample[((sample.len() - 1) as f32 * f) as usize];
@@ -227,7 +277,8 @@ fn choose_axes(state: &mut BroadPhaseState, order: &[u32]) {
     state.second = if spread[u] >= spread[v] { u } else { v };
 }
 
-/// A fat box in a lane of the sweep.
+/// A fat box in a lane of the sweep: what the sweep reads of a box, copied in sorted order
+/// (64 bytes).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct SweepBox {
     aabb: Aabb,
@@ -237,7 +288,9 @@ pub(super) struct SweepBox {
     /// The collider's slot.
     index: u32,
     /// The first lane the box is in (a pair is reported there).
-    first_lane: u32,
+    first_lane: u16,
     /// The fat box moved in this run (only pairs with a moved box can be new).
     moved: bool,
 }
+
+const _: () = assert!(std::mem::size_of::<SweepBox>() == 64);
