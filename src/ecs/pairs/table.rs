@@ -154,6 +154,20 @@ impl PairTable {
             .map(|(s, _)| &s.outcome)
     }
 
+    /// Number of slots, live or free: [`PairTable::outcome_in_slot`] takes `0..slot_count()`.
+    pub fn slot_count(&self) -> usize {
+        self.slots.len()
+    }
+
+    /// The last answer of the pair in slot `slot`, `None` when the slot is free (or out of
+    /// range). A pair keeps its slot while it lives, so picking slots at random and keeping the
+    /// live ones samples the pairs uniformly, at a cost that does not grow with the table
+    /// (what `examples/profile.rs` does to re-test a few pairs each frame).
+    pub fn outcome_in_slot(&self, slot: usize) -> Option<&PairOutcome> {
+        let live = self.ends.get(slot).is_some_and(|e| e.live);
+        live.then(|| &self.slots[slot].outcome)
+    }
+
     /// Pair `i`'s colliders and stamps.
     #[inline]
     pub(crate) fn ends(&self, i: u32) -> &PairEnds {
@@ -452,6 +466,34 @@ mod tests {
             contact: None,
             offset: Vec3::ZERO,
         }
+    }
+
+    /// Slots of removed pairs read as free; the live ones give the same answers as
+    /// `outcomes()`.
+    #[test]
+    fn outcome_in_slot_sees_the_live_pairs_only() {
+        let e = |i| Entity::from_raw_u32(i).unwrap();
+        let mut t = PairTable::default();
+        let slots: Vec<u32> = (0..5)
+            .map(|k| t.create((e(k), k), (e(10 + k), 10 + k), 1))
+            .collect();
+        t.remove(slots[1]);
+        t.remove(slots[3]);
+        assert_eq!(t.slot_count(), 5);
+        let live: Vec<_> = (0..t.slot_count() + 2)
+            .filter_map(|i| t.outcome_in_slot(i))
+            .collect();
+        assert_eq!(live, t.outcomes().collect::<Vec<_>>());
+        let firsts = |k: u32| [e(k), e(10 + k)];
+        assert_eq!(live.len(), 3);
+        for (o, k) in live.iter().zip([0, 2, 4]) {
+            assert!(firsts(k).contains(&o.a) && firsts(k).contains(&o.b));
+        }
+        // A freed slot is taken again by the next pair.
+        let again = t.create((e(7), 7), (e(8), 8), 2);
+        assert!(again == slots[1] || again == slots[3]);
+        let reused = t.outcome_in_slot(again as usize).unwrap();
+        assert!([reused.a, reused.b].contains(&e(7)));
     }
 
     #[test]
