@@ -54,8 +54,8 @@ use support::{Options, Scene, tally};
 
 /// Pairs re-tested exactly each frame for the agreement figure.
 const SAMPLES_PER_FRAME: usize = 8;
-/// Pair slots drawn at most per frame to find them (pairs of colliders whose boxes overlap are
-/// a good part of the table in every scene here: the cap is rarely reached).
+/// Pair slots drawn at most per frame to find them: bounds the work in a frame where few pairs'
+/// boxes overlap (that frame then samples fewer).
 const SAMPLE_DRAWS_PER_FRAME: usize = 4096;
 
 struct Args {

@@ -484,10 +484,10 @@ mod tests {
             .filter_map(|i| t.outcome_in_slot(i))
             .collect();
         assert_eq!(live, t.outcomes().collect::<Vec<_>>());
-        let firsts = |k: u32| [e(k), e(10 + k)];
+        let colliders_of = |k: u32| [e(k), e(10 + k)];
         assert_eq!(live.len(), 3);
         for (o, k) in live.iter().zip([0, 2, 4]) {
-            assert!(firsts(k).contains(&o.a) && firsts(k).contains(&o.b));
+            assert!(colliders_of(k).contains(&o.a) && colliders_of(k).contains(&o.b));
         }
         // A freed slot is taken again by the next pair.
         let again = t.create((e(7), 7), (e(8), 8), 2);
