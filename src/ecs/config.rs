@@ -157,6 +157,15 @@ pub struct CollisionConfig {
     pub response_budget: ResponseBudget,
 }
 
+impl CollisionConfig {
+    /// The fewest node pairs a tested ADB pair gets under a time budget: an eighth of
+    /// `max_slice`, and `min_slice` at least (its tests were chosen by what a test costs, so
+    /// each gets enough to settle; a test cut short is wasted).
+    pub(crate) fn timed_slice_floor(&self) -> u64 {
+        self.min_slice.max(self.max_slice / 8)
+    }
+}
+
 impl Default for CollisionConfig {
     fn default() -> Self {
         Self {

@@ -387,8 +387,7 @@ impl Context<'_> {
         match (self.share, self.deadlines.others) {
             (Some(_), Some(_)) => {
                 let max = self.config.max_slice.max(self.config.min_slice);
-                let floor = (max / 8).max(self.config.min_slice);
-                Budget::NodePairs(max.min(s.node_cap).max(floor))
+                Budget::NodePairs(max.min(s.node_cap).max(self.config.timed_slice_floor()))
             }
             _ => self.adb_budget(job, s),
         }

@@ -142,7 +142,7 @@ pub fn narrow_phase(
     // (an eighth of the largest slice at least): a test cut short is wasted, tested again
     // next run and never answered from memory; the deadline still bounds the whole.
     let min_slice = match config.budget {
-        FrameBudget::Time(_) => config.min_slice.max(config.max_slice / 8),
+        FrameBudget::Time(_) => config.timed_slice_floor(),
         _ => config.min_slice,
     };
     let share = nodes.map(|total| {
