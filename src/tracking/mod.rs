@@ -38,6 +38,7 @@
 //! [`Fidelity::Tracking`](crate::ecs::Fidelity::Tracking).
 
 mod boxes;
+mod candidates;
 mod config;
 mod contact;
 mod feature;

@@ -64,6 +64,10 @@ pub(crate) struct Patch {
     /// Whether one of [`Patch::edges`] may be collapsed (shorter than the square root of its
     /// [`CreaseEdge::collapse_below_sq`]), from [`PatchTree::update_cones`].
     pub collapsed: bool,
+    /// How far its vertices have moved in all: the sum over
+    /// [`TrackedSurface::set_positions`](super::TrackedSurface::set_positions) calls of the
+    /// farthest move of one of them (at least how far any of them moved between two calls).
+    pub travel: f64,
     /// Current box.
     pub min: Vec3,
     /// Current box.
@@ -142,6 +146,7 @@ impl PatchTree {
                     adjacent: Vec::new(),
                     edges: Vec::new(),
                     collapsed: false,
+                    travel: 0.0,
                     min: n.min,
                     max: n.max,
                     cone_axis: Vec3::Y,
@@ -223,6 +228,19 @@ impl PatchTree {
             };
             self.nodes[i].min = lo;
             self.nodes[i].max = hi;
+        }
+    }
+
+    /// Adds to each patch's [`Patch::travel`] the farthest move of one of its vertices from
+    /// `previous` to `current` positions (`O(vertices)`).
+    pub fn add_travel(&mut self, previous: &[Vec3], current: &[Vec3]) {
+        for patch in &mut self.patches {
+            let farthest = patch
+                .vertices
+                .iter()
+                .map(|&v| previous[v as usize].distance_squared(current[v as usize]))
+                .fold(0.0, f32::max);
+            patch.travel += (farthest as f64).sqrt();
         }
     }
 
@@ -335,9 +353,22 @@ impl PatchTree {
         stack: &mut Vec<(u32, u32)>,
         out: &mut Vec<(u32, u32)>,
     ) {
-        let overlap = |a: &Node, b: &Node| boxes_meet(a.min, a.max, b.min, b.max, margin);
         stack.clear();
         stack.push((0, 0));
+        self.self_overlaps_from(margin, stack, out);
+    }
+
+    /// [`PatchTree::self_overlaps`] below the node pairs on `stack` only (a node with itself:
+    /// the pairs inside its subtree; two nodes: the pairs between their subtrees), which it
+    /// empties. The node pairs given need not meet.
+    pub fn self_overlaps_from(
+        &self,
+        margin: f32,
+        stack: &mut Vec<(u32, u32)>,
+        out: &mut Vec<(u32, u32)>,
+    ) {
+        let overlap = |a: &Node, b: &Node| boxes_meet(a.min, a.max, b.min, b.max, margin);
+        stack.retain(|&(i, j)| i == j || overlap(&self.nodes[i as usize], &self.nodes[j as usize]));
         while let Some((i, j)) = stack.pop() {
             let (ni, nj) = (&self.nodes[i as usize], &self.nodes[j as usize]);
             if i == j {
@@ -370,6 +401,41 @@ impl PatchTree {
                     stack.push(if split_i { (c, keep) } else { (keep, c) });
                 }
             }
+        }
+    }
+
+    /// The roots of the subtrees the tree is cut into for [`KeptCandidates`]: the nodes at
+    /// depth `depth` (and the patches above it), in breadth-first order.
+    ///
+    /// [`KeptCandidates`]: super::candidates::KeptCandidates
+    pub fn block_roots(&self, depth: u32) -> Vec<u32> {
+        let mut level = vec![0u32];
+        let mut roots = Vec::new();
+        for _ in 0..depth {
+            let mut next = Vec::with_capacity(level.len() * 2);
+            for &n in &level {
+                let node = &self.nodes[n as usize];
+                if node.patch != NONE {
+                    roots.push(n);
+                } else {
+                    next.extend([node.left, node.left + 1]);
+                }
+            }
+            level = next;
+        }
+        roots.extend(level);
+        roots.sort_unstable();
+        roots
+    }
+
+    /// The patches below `node`, appended to `out`.
+    pub fn patches_below(&self, node: u32, out: &mut Vec<u32>) {
+        let n = &self.nodes[node as usize];
+        if n.patch != NONE {
+            out.push(n.patch);
+        } else {
+            self.patches_below(n.left, out);
+            self.patches_below(n.left + 1, out);
         }
     }
 

@@ -5,6 +5,7 @@ use rand::RngExt;
 use rand::rngs::Xoshiro256PlusPlus;
 
 use super::boxes::{Box64, box_axis_gap, box_gap, triangle_box};
+use super::candidates::KeptCandidates;
 use super::config::Sampling;
 use super::patch_tree::{COLLAPSED_FRACTION, box_transform, random_leaf_pair};
 use super::surface::{ExcludedPairs, Placed, TrackedSurface};
@@ -30,6 +31,10 @@ pub(crate) struct SamplerScratch {
     boxes: Vec<([glam::DVec3; 3], Box64)>,
     cdf_a: Vec<f64>,
     cdf_b: Vec<f64>,
+    /// Self-collision under a time allowance: the candidates kept between steps.
+    pub kept: KeptCandidates,
+    /// The kept sharp edges of this step (see [`KeptCandidates::refresh`]).
+    kept_sharp: Vec<(f32, u32, bool)>,
     /// Overlapping patch pairs found this frame.
     pub overlap_count: usize,
     /// Time spent this frame finding candidates (patch overlaps, covered patch pairs, sharp
@@ -71,6 +76,10 @@ pub(crate) struct DrawRequest<'a> {
     /// Two meshes: the second's pose in the first's frame at the previous step, if any (for
     /// velocity sampling, which weighs the relative rigid motion too).
     pub previous_pose: Option<PoseF64>,
+    /// Hierarchy sampling in self-collision: the candidates (overlapping patch pairs, sharp
+    /// edges) are kept between steps and brought up to date where the surface moved most
+    /// within this time ([`KeptCandidates`]); `None`: found anew over the whole surface.
+    pub candidate_allowance: Option<std::time::Duration>,
 }
 
 /// Draws `request.count` new triangle pairs of `a` and `b` into `out`; `known` are the
@@ -133,7 +142,15 @@ pub(crate) fn draw(
         Sampling::Hierarchy => {
             let started = std::time::Instant::now();
             scratch.overlaps.clear();
-            if self_mode {
+            if let (true, Some(allowance)) = (self_mode, request.candidate_allowance) {
+                scratch.kept.refresh(
+                    a.surface,
+                    margin,
+                    allowance,
+                    &mut scratch.overlaps,
+                    &mut scratch.kept_sharp,
+                );
+            } else if self_mode {
                 a.surface
                     .patches
                     .self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
@@ -162,9 +179,12 @@ pub(crate) fn draw(
                     (x, y)
                 });
             }
-            if !scratch.covered.is_empty() {
-                scratch.covered.sort_unstable();
-                scratch.covered.dedup();
+            scratch.covered.sort_unstable();
+            scratch.covered.dedup();
+            // Kept candidates are many (tens of thousands on a coiled 100k-triangle tube):
+            // their covered pairs are passed over when drawn rather than filtered out here.
+            let kept = self_mode && request.candidate_allowance.is_some();
+            if !scratch.covered.is_empty() && !kept {
                 let covered = &scratch.covered;
                 scratch
                     .overlaps
@@ -192,6 +212,9 @@ pub(crate) fn draw(
             for _ in 0..budget {
                 for _ in 0..DESCENT_TRIES {
                     let (pa, pb) = scratch.overlaps[rng.random_range(0..scratch.overlaps.len())];
+                    if kept && scratch.covered.binary_search(&(pa, pb)).is_ok() {
+                        continue;
+                    }
                     let na = a.surface.patches.patches[pa as usize].node;
                     let nb = b.surface.patches.patches[pb as usize].node;
                     let Some((la, lb)) =
@@ -288,7 +311,19 @@ fn crease_probes(
     }
     scratch.near_known.sort_unstable();
     scratch.near_known.dedup();
-    sharp_edges(a.surface, &scratch.near_known, &mut scratch.sharp);
+    if request.candidate_allowance.is_some() {
+        let near_known = &scratch.near_known;
+        let free = |v: u32| near_known.binary_search(&v).is_err();
+        scratch.sharp.clear();
+        scratch.sharp.extend(
+            scratch
+                .kept_sharp
+                .iter()
+                .filter(|&&(_, edge, _)| topo.edge(edge).vertices.into_iter().all(free)),
+        );
+    } else {
+        sharp_edges(a.surface, &scratch.near_known, &mut scratch.sharp);
+    }
     // `count` edges drawn at random among the `PROBE_POOL · count` sharpest.
     let sharpest =
         |x: &(f32, u32, bool), y: &(f32, u32, bool)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
@@ -351,13 +386,25 @@ pub(crate) fn sharp_edges(
     out: &mut Vec<(f32, u32, bool)>,
 ) {
     out.clear();
+    let all = 0..surface.patches.patches.len() as u32;
+    sharp_edges_of(surface, all, near_known, out);
+}
+
+/// [`sharp_edges`] of the patches `patches` only, appended to `out`.
+pub(crate) fn sharp_edges_of(
+    surface: &TrackedSurface,
+    patches: impl IntoIterator<Item = u32>,
+    near_known: &[u32],
+    out: &mut Vec<(f32, u32, bool)>,
+) {
     let normals = &surface.normals;
     let positions = surface.mesh().positions();
     let tree = &surface.patches;
-    for (p, patch) in tree.patches.iter().enumerate() {
-        if !tree.may_crease(p as u32) {
+    for p in patches {
+        if !tree.may_crease(p) {
             continue;
         }
+        let patch = &tree.patches[p as usize];
         for c in &patch.edges {
             let [t0, t1] = c.triangles;
             let [v0, v1] = c.vertices;

@@ -38,6 +38,8 @@ pub struct TrackedSurface {
     /// The [welded](TriMesh::welded) mesh and its topology, when welding joins some corners
     /// (seams, poles): rings for the exclusion are counted there.
     welded: Option<Box<(TriMesh, Topology)>>,
+    /// Names this surface's topology: given on construction, shared by its clones.
+    id: u64,
 }
 
 /// Which triangle pairs of one surface self-collision leaves out (those within a number of
@@ -129,7 +131,17 @@ impl TrackedSurface {
             generation: 0,
             max_displacement: 0.0,
             exclusion: std::sync::OnceLock::new(),
+            id: {
+                static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+                NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+            },
         }
+    }
+
+    /// Names the surface's topology (triangles, patches and edges): the same for a surface and
+    /// its clones, different for surfaces built apart.
+    pub(crate) fn topology_id(&self) -> u64 {
+        self.id
     }
 
     /// Moves the vertices (same count, all finite), keeps the old positions as the previous
@@ -147,6 +159,8 @@ impl TrackedSurface {
         triangle_normals(&self.mesh, &mut self.normals);
         self.patches
             .update_cones(&self.normals, self.mesh.positions());
+        self.patches
+            .add_travel(&self.previous, self.mesh.positions());
         self.max_displacement = self
             .previous
             .iter()

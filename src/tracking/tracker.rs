@@ -43,6 +43,11 @@ const MIN_ADAPTIVE_PAIRS: usize = 8;
 /// into a tracker that searches nothing. A controller setting, not fitted to any mesh.
 const PAIR_FLOOR: f64 = 0.25;
 
+/// Under a time budget, in self-collision: the share of the budget after which the step stops
+/// bringing its kept candidates up to date (see [`DrawRequest::candidate_allowance`]). A
+/// controller setting, not fitted to any mesh.
+const CANDIDATE_SHARE: f64 = 0.2;
+
 /// A tracked pair of locally closest features, persistent across frames.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrackedPair {
@@ -252,6 +257,7 @@ impl Tracker {
         self.contacts.clear();
         self.last_relative_pose = None;
         self.last_generations = None;
+        self.scratch.sampler.kept = Default::default();
     }
 
     /// Whether each surface deformed since the last step.
@@ -500,6 +506,10 @@ impl Tracker {
             thickness: cfg.thickness,
             margin,
             previous_pose: self.last_relative_pose,
+            candidate_allowance: cfg
+                .time_budget
+                .filter(|_| self_mode)
+                .map(|b| b.mul_f64(CANDIDATE_SHARE)),
         };
         draw(
             &request,
