@@ -84,7 +84,9 @@ pub struct TrackerConfig {
     /// Seed of the random pair generator (the tracker's stream is also keyed by the frame).
     pub seed: u64,
     /// A time budget per step instead of a fixed number of new pairs: the step's end is a
-    /// deadline ([`Tracker::step_self_until`](super::Tracker::step_self_until)), and after
+    /// deadline ([`Tracker::step_self_until`](super::Tracker::step_self_until); the local
+    /// search stops early enough to leave what pruning, propagation and the continuous check
+    /// took at the last step), and after
     /// every step the new pairs per frame (starting from `pairs_per_frame`) are scaled towards
     /// what fills 80 % of the budget beside the step's fixed cost (finding the candidates,
     /// [`StepTimes::candidates`](super::StepTimes::candidates)), at most ×1.5 or ÷2 per step,

@@ -428,6 +428,12 @@ impl PatchTree {
         roots
     }
 
+    /// Whether the boxes of nodes `a` and `b` come within `margin`.
+    pub fn nodes_meet(&self, a: u32, b: u32, margin: f32) -> bool {
+        let (na, nb) = (&self.nodes[a as usize], &self.nodes[b as usize]);
+        boxes_meet(na.min, na.max, nb.min, nb.max, margin)
+    }
+
     /// The patches below `node`, appended to `out`.
     pub fn patches_below(&self, node: u32, out: &mut Vec<u32>) {
         let n = &self.nodes[node as usize];

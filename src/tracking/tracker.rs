@@ -165,6 +165,10 @@ pub struct Tracker {
     /// The surfaces' [`TrackedSurface::generation`] at the last step (whether they deformed
     /// since).
     last_generations: Option<[u64; 2]>,
+    /// Under a time budget: what the work after the local search (pruning, propagation, the
+    /// continuous check) took at the last step; the search stops that much before the
+    /// deadline, so that the step ends by it.
+    tail: std::time::Duration,
 }
 
 /// Where the surfaces were at the start of a step (for the continuous check).
@@ -202,6 +206,7 @@ impl Tracker {
             scratch: Scratch::default(),
             last_relative_pose: None,
             last_generations: None,
+            tail: std::time::Duration::ZERO,
         }
     }
 
@@ -455,6 +460,17 @@ impl Tracker {
     ) {
         let deadline = std::cell::Cell::new(deadline);
         let passed = || deadline.get().is_some_and(|d| Instant::now() >= d);
+        // Under a time budget the search leaves time for what follows it (see `Tracker::tail`).
+        let reserve = if self.config.time_budget.is_some() {
+            self.tail
+        } else {
+            std::time::Duration::ZERO
+        };
+        let search_passed = || {
+            deadline
+                .get()
+                .is_some_and(|d| Instant::now() + reserve >= d)
+        };
         let mut lap = Lap::start();
         let cfg = &self.config;
         let mean_edge = a
@@ -543,7 +559,7 @@ impl Tracker {
             if searcher.excluded(ta, tb) {
                 continue;
             }
-            stats.cut = stats.cut || passed();
+            stats.cut = stats.cut || search_passed();
             let search = !stats.cut
                 || if age == 0 {
                     fresh_late += 1;
@@ -722,6 +738,7 @@ impl Tracker {
             stats.contacts = self.contacts.len();
             stats.times.continuous = lap.lap();
         }
+        self.tail = stats.times.pruning + stats.times.propagation + stats.times.continuous;
         self.stats = stats;
     }
 }
