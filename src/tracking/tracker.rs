@@ -638,9 +638,11 @@ impl Tracker {
         }
         let mut added = 0;
         while let Some((ta, tb)) = s.queue.pop() {
-            stats.cut = stats.cut || passed();
-            // Late, an eighth of the propagation (each step of it is one evaluation).
-            let limit = if stats.cut {
+            // Late, an eighth of the propagation (each step of it is one evaluation): past the
+            // deadline itself, not the search's earlier stop (see `Tracker::tail`).
+            let late = passed();
+            stats.cut = stats.cut || late;
+            let limit = if late {
                 cfg.propagation_limit.div_ceil(LATE_SHARE)
             } else {
                 cfg.propagation_limit
@@ -698,7 +700,7 @@ impl Tracker {
                 excluded: |x, y| searcher.excluded(x, y),
                 size: size as f64,
             };
-            let mut cut = stats.cut;
+            let mut cut = passed();
             let counts = sweep.run(
                 self.pairs.iter().map(|p| (p.triangle_a, p.triangle_b)),
                 |k| {
@@ -708,7 +710,7 @@ impl Tracker {
                 cfg.propagation_limit,
                 &mut s.sweep,
             );
-            stats.cut = cut;
+            stats.cut = stats.cut || cut;
             stats.swept = counts.swept;
             stats.sweep_skipped = counts.skipped;
             stats.sweep_triangle_pairs = counts.triangle_pairs;
