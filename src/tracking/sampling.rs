@@ -103,6 +103,7 @@ pub(crate) fn draw(
     } = *request;
     scratch.overlap_count = 0;
     scratch.candidates_time = std::time::Duration::ZERO;
+    scratch.kept.refreshed = 0;
     if n == 0 {
         return;
     }

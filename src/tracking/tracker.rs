@@ -115,6 +115,13 @@ pub struct StepStats {
     /// (not among the contacts at its end; they carry a
     /// [`Contact::time_of_impact`]).
     pub crossings: usize,
+    /// Under a time budget, in self-collision with hierarchy sampling: the kept candidate
+    /// lists (pairs of blocks of the patch tree, see [`TrackerConfig::time_budget`]) brought
+    /// up to date in this step: none on a surface at rest, those of the blocks a motion
+    /// reached. 0 when the candidates are found anew (no budget) or none were drawn.
+    pub candidate_lists_refreshed: usize,
+    /// The kept candidate lists there are (0 when the candidates are found anew).
+    pub candidate_lists: usize,
     /// Where the step's time went.
     pub times: StepTimes,
 }
@@ -538,6 +545,10 @@ impl Tracker {
         );
         stats.sampled = s.starts.len();
         stats.patch_overlaps = s.sampler.overlap_count;
+        if request.candidate_allowance.is_some() {
+            stats.candidate_lists_refreshed = s.sampler.kept.refreshed;
+            stats.candidate_lists = s.sampler.kept.pair_count;
+        }
         let drawing = lap.lap();
         stats.times.candidates = s.sampler.candidates_time.min(drawing);
         stats.times.sampling = drawing - stats.times.candidates;
