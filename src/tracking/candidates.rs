@@ -3,17 +3,18 @@
 //! time allowance per step.
 //!
 //! The patch tree is cut into blocks (its subtrees at a depth that gives them about
-//! [`BLOCK_PATCHES`] patches each, at most [`MAX_BLOCK_DEPTH`] levels down). The overlapping patch
-//! pairs are kept per pair of blocks (a block with itself: the pairs inside it), the sharp
-//! edges per block (with the block's pair with itself). Each patch has an odometer (how far
-//! its vertices moved in all, kept by the surface update), and so each block (the sum of its
-//! patches'). A step refreshes the lists that are the most out of date first (how much the
-//! odometers of their blocks grew since they were made, and for sharp edges those of the
-//! blocks next to it too: an edge's second triangle may lie there), until its allowance is spent: a
-//! surface at rest costs nothing, and a motion in one place refreshes the pairs of the blocks
-//! it reached only. Where no vertex moved, the lists are exact. The lists are only where
-//! samples start: a pair drawn from an out-of-date list is measured on the current surface by
-//! the local search like any other, so a stale list costs samples, never a wrong contact.
+//! [`BLOCK_PATCHES`] patches each, at most [`MAX_BLOCK_DEPTH`] levels down). The overlapping
+//! patch pairs are kept per pair of blocks (a block with itself: the pairs inside it), the
+//! sharp edges per block (with the block's pair with itself). Each patch has an odometer (how
+//! far its vertices moved in all, kept by the surface update), and so each block (the sum of
+//! its patches'). A step refreshes the lists that are the most out of date first (how much
+//! the odometers of their blocks grew since they were made, and for sharp edges those of the
+//! blocks next to it too: an edge's second triangle may lie there), until its allowance is
+//! spent: a surface at rest costs nothing, and a motion in one place refreshes the pairs of
+//! the blocks it reached only. Where no vertex moved, the lists are exact. The lists are only
+//! where samples start: a pair drawn from an out-of-date list is measured on the current
+//! surface by the local search like any other, so a stale list costs samples, never a wrong
+//! contact.
 
 use std::time::{Duration, Instant};
 
@@ -113,8 +114,8 @@ impl KeptCandidates {
         // found with makes it incomplete.
         self.order.clear();
         for (k, pair) in self.pairs.iter().enumerate() {
-            // Two blocks apart whose list is empty: it is exact still (they can only have
-            // come apart by moving).
+            // Two blocks whose boxes are apart hold no overlapping patch pairs: an empty list
+            // of theirs is exact (a list that is not empty is refreshed, to empty).
             let (rx, ry) = (
                 self.blocks[pair.x as usize].root,
                 self.blocks[pair.y as usize].root,
@@ -292,8 +293,8 @@ mod tests {
         result
     }
 
-    /// A sheet (of 48 × 48 squares in the tests) whose right half is turned about the z axis by `angle` (folded over
-    /// the left half at π, a little above it).
+    /// A sheet (of 48 × 48 squares in the tests) whose right half is turned about the z axis
+    /// by `angle` (folded over the left half at π, a little above it).
     fn folded(sheet: &crate::mesh::TriMesh, angle: f32) -> Vec<Vec3> {
         sheet
             .positions()
