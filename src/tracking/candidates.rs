@@ -76,13 +76,20 @@ pub(crate) struct KeptCandidates {
     stack: Vec<(u32, u32)>,
     /// Block pairs refreshed by the last [`KeptCandidates::refresh`].
     pub refreshed: usize,
-    /// Blocks in all.
-    pub block_count: usize,
-    /// Block pairs in all (a block with itself included).
-    pub pair_count: usize,
 }
 
 impl KeptCandidates {
+    /// Blocks in all.
+    #[cfg(test)]
+    pub fn block_count(&self) -> usize {
+        self.blocks.len()
+    }
+
+    /// Block pairs in all (a block with itself included): the lists kept.
+    pub fn pair_count(&self) -> usize {
+        self.pairs.len()
+    }
+
     /// Brings the lists up to date where `surface` moved most, the most out of date first,
     /// until `allowance` is spent (lists never made, or made with a smaller margin than
     /// `margin`, are made whatever the allowance); then writes the overlapping patch pairs to
@@ -214,8 +221,6 @@ impl KeptCandidates {
                 ..BlockPair::default()
             })
             .collect();
-        self.block_count = self.blocks.len();
-        self.pair_count = self.pairs.len();
     }
 
     /// Finds block pair `k`'s overlapping patch pairs anew (and, for a block with itself,
@@ -231,11 +236,11 @@ impl KeptCandidates {
         pair.overlaps.clear();
         tree.self_overlaps_from(margin, &mut self.stack, &mut pair.overlaps);
         if pair.x == pair.y {
-            let seen: Vec<f64> = self.blocks[pair.x as usize]
-                .neighbours
-                .iter()
-                .map(|&q| self.blocks[q as usize].odometer)
-                .collect();
+            // Reuses the block's own vector: no allocation per refresh.
+            let mut seen = std::mem::take(&mut self.blocks[pair.x as usize].neighbours_seen);
+            seen.clear();
+            let neighbours = &self.blocks[pair.x as usize].neighbours;
+            seen.extend(neighbours.iter().map(|&q| self.blocks[q as usize].odometer));
             let block = &mut self.blocks[pair.x as usize];
             block.neighbours_seen = seen;
             block.sharp.clear();
@@ -329,10 +334,10 @@ mod tests {
             let lists = refresh(&mut kept, &surface, Duration::MAX);
             assert_eq!(lists, full_search(&surface), "step {step}");
             saw_overlaps |= !lists.0.is_empty() && !lists.1.is_empty();
-            assert!(kept.refreshed > 0 && kept.block_count >= 16);
+            assert!(kept.refreshed > 0 && kept.block_count() >= 16);
             assert_eq!(
-                kept.pair_count,
-                kept.block_count * (kept.block_count + 1) / 2
+                kept.pair_count(),
+                kept.block_count() * (kept.block_count() + 1) / 2
             );
         }
         assert!(
@@ -348,7 +353,7 @@ mod tests {
             refresh(&mut kept, &other, Duration::ZERO),
             full_search(&other)
         );
-        assert_eq!(kept.refreshed, kept.pair_count);
+        assert_eq!(kept.refreshed, kept.pair_count());
     }
 
     /// Without time, a step refreshes one list only (the most out of date), except on the
@@ -364,7 +369,7 @@ mod tests {
             refresh(&mut kept, &surface, Duration::ZERO),
             full_search(&surface)
         );
-        assert_eq!(kept.refreshed, kept.pair_count);
+        assert_eq!(kept.refreshed, kept.pair_count());
         surface
             .set_positions(&folded(&sheet, std::f32::consts::PI))
             .unwrap();
@@ -378,7 +383,7 @@ mod tests {
             }
             assert_eq!(kept.refreshed, 1);
             steps += 1;
-            assert!(steps <= kept.pair_count);
+            assert!(steps <= kept.pair_count());
         }
         assert!(steps > 1, "the fold reached more than one block");
         // A motion of one corner vertex: the pairs of its block (one with each block), or of
@@ -387,8 +392,8 @@ mod tests {
         moved[0] += Vec3::new(0.0, 0.05, 0.0);
         surface.set_positions(&moved).unwrap();
         refresh(&mut kept, &surface, Duration::MAX);
-        assert!(kept.refreshed >= 1 && kept.refreshed <= 4 * kept.block_count);
-        assert!(kept.refreshed < kept.pair_count / 4);
+        assert!(kept.refreshed >= 1 && kept.refreshed <= 4 * kept.block_count());
+        assert!(kept.refreshed < kept.pair_count() / 4);
         assert_eq!(
             refresh(&mut kept, &surface, Duration::MAX),
             full_search(&surface)
@@ -407,7 +412,7 @@ mod tests {
         refresh(&mut kept, &surface, Duration::ZERO);
         let (mut overlaps, mut sharp) = (Vec::new(), Vec::new());
         kept.refresh(&surface, 0.5, Duration::ZERO, &mut overlaps, &mut sharp);
-        assert_eq!(kept.refreshed, kept.pair_count);
+        assert_eq!(kept.refreshed, kept.pair_count());
         let (mut stack, mut wide) = (Vec::new(), Vec::new());
         surface.patches.self_overlaps(0.5, &mut stack, &mut wide);
         wide.sort_unstable();

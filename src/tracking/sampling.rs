@@ -143,7 +143,9 @@ pub(crate) fn draw(
         Sampling::Hierarchy => {
             let started = std::time::Instant::now();
             scratch.overlaps.clear();
-            if let (true, Some(allowance)) = (self_mode, request.candidate_allowance) {
+            // Self-collision under a time allowance: candidates kept between steps.
+            let kept = self_mode && request.candidate_allowance.is_some();
+            if let (true, Some(allowance)) = (kept, request.candidate_allowance) {
                 scratch.kept.refresh(
                     a.surface,
                     margin,
@@ -184,7 +186,6 @@ pub(crate) fn draw(
             scratch.covered.dedup();
             // Kept candidates are many (tens of thousands on a coiled 100k-triangle tube):
             // their covered pairs are passed over when drawn rather than filtered out here.
-            let kept = self_mode && request.candidate_allowance.is_some();
             if !scratch.covered.is_empty() && !kept {
                 let covered = &scratch.covered;
                 scratch

@@ -547,7 +547,7 @@ impl Tracker {
         stats.patch_overlaps = s.sampler.overlap_count;
         if request.candidate_allowance.is_some() {
             stats.candidate_lists_refreshed = s.sampler.kept.refreshed;
-            stats.candidate_lists = s.sampler.kept.pair_count;
+            stats.candidate_lists = s.sampler.kept.pair_count();
         }
         let drawing = lap.lap();
         stats.times.candidates = s.sampler.candidates_time.min(drawing);
