@@ -42,6 +42,7 @@ pub use traverse_pair::{
     ExactOptions, ExactOutcome, intersecting_pairs, intersects, intersects_with,
     root_boxes_overlap, triangle_pair_intersects,
 };
+pub(crate) use traverse_self::within_thickness;
 pub use traverse_self::{
     SelfContact, self_contacts, self_contacts_excluding, self_intersections, self_intersects,
 };

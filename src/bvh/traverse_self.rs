@@ -197,7 +197,7 @@ pub fn self_contacts_excluding(
 /// that only drop pairs whose distance exceeds `h` by far more than rounding, then the exact
 /// distance.
 #[inline]
-fn within_thickness(a: &[DVec3; 3], b: &[DVec3; 3], h: f64) -> Option<f64> {
+pub(crate) fn within_thickness(a: &[DVec3; 3], b: &[DVec3; 3], h: f64) -> Option<f64> {
     let (lo_a, hi_a) = (a[0].min(a[1]).min(a[2]), a[0].max(a[1]).max(a[2]));
     let (lo_b, hi_b) = (b[0].min(b[1]).min(b[2]), b[0].max(b[1]).max(b[2]));
     // Rounding in the projections below is ~1e-16 of the extent; the margin is 1e-9 of it.

@@ -13,6 +13,7 @@
 mod combine;
 mod error;
 pub mod generate;
+mod local_exclusion;
 mod mass;
 mod obj;
 mod random_shapes;
@@ -22,6 +23,7 @@ mod tri_mesh;
 mod weld;
 
 pub use error::MeshError;
+pub(crate) use local_exclusion::LocalExclusion;
 pub use mass::{MassModel, MassProperties};
 pub(crate) use rings::{RingWalk, VertexList};
 pub use rings::{SelfExclusion, adjacent, triangles_within_rings};

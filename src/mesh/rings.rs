@@ -201,6 +201,15 @@ impl SelfExclusion {
         (self.vertices, self.outer.short.len())
     }
 
+    /// Triangle `t`'s two sorted vertex lists: `excludes(a, b)` is whether the first of `a`
+    /// meets the second of `b`.
+    pub(crate) fn lists(&self, t: u32) -> (&[u32], &[u32]) {
+        (
+            self.outer.get(t),
+            self.inner.as_ref().unwrap_or(&self.outer).get(t),
+        )
+    }
+
     /// Whether triangles `a` and `b` (indices into the mesh it was built for) are within the
     /// excluded rings: the same answer as [`triangles_within_rings`] on their corners in the
     /// welded mesh.

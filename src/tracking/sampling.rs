@@ -9,8 +9,9 @@ use super::candidates::KeptCandidates;
 use super::config::Sampling;
 use super::patch_tree::{COLLAPSED_FRACTION, box_transform, random_leaf_pair};
 use super::surface::{ExcludedPairs, Placed, TrackedSurface};
+use crate::bvh::within_thickness;
 use crate::geometry::{PoseF64, closest_points_triangle_triangle};
-use crate::mesh::{RingWalk, VertexList, adjacent};
+use crate::mesh::{LocalExclusion, RingWalk, VertexList, adjacent};
 use glam::Vec3;
 
 /// Scratch memory of the samplers, reused across frames.
@@ -29,6 +30,11 @@ pub(crate) struct SamplerScratch {
     ring: VertexList,
     local: Vec<u32>,
     boxes: Vec<([glam::DVec3; 3], Box64)>,
+    /// The exclusion among a crease probe's triangles, as bit masks.
+    local_exclusion: LocalExclusion,
+    /// A crease probe's triangles in the order of their boxes along x, and its pairs found.
+    order: Vec<u32>,
+    hits: Vec<(u32, u32)>,
     cdf_a: Vec<f64>,
     cdf_b: Vec<f64>,
     /// Self-collision under a time allowance: the candidates kept between steps.
@@ -359,18 +365,51 @@ fn crease_probes(
             let x = a.triangle(t);
             (x, triangle_box(&x))
         }));
-        for (k, (x, box_x)) in scratch.boxes.iter().enumerate() {
-            let t = scratch.local[k];
-            for (j, (y, box_y)) in scratch.boxes.iter().enumerate().skip(k + 1) {
-                let u = scratch.local[j];
-                if box_axis_gap(box_x, box_y) > h || excluded.excludes(t, u) {
+        // Most of these pairs are within the excluded rings: one bit test each when the
+        // neighbourhood's vertices fit the masks.
+        let built = match excluded {
+            ExcludedPairs::Cached(exclusion) => {
+                scratch.local_exclusion.build(exclusion, &scratch.local)
+            }
+            ExcludedPairs::Walk { .. } => false,
+        };
+        let masks = built.then_some(&scratch.local_exclusion);
+        // Sweep along x: pairs whose boxes are more than `h` apart along it are never looked
+        // at. Their hits are written in the order of a scan of every pair.
+        let boxes = &scratch.boxes;
+        scratch.order.clear();
+        scratch.order.extend(0..boxes.len() as u32);
+        scratch
+            .order
+            .sort_unstable_by(|&i, &j| boxes[i as usize].1.0.x.total_cmp(&boxes[j as usize].1.0.x));
+        scratch.hits.clear();
+        for (n, &i) in scratch.order.iter().enumerate() {
+            let reach = boxes[i as usize].1.1.x + h;
+            for &j in &scratch.order[n + 1..] {
+                if boxes[j as usize].1.0.x > reach {
+                    break;
+                }
+                let (k, l) = (i.min(j) as usize, i.max(j) as usize);
+                let excludes = match masks {
+                    Some(m) => m.excludes(k, l),
+                    None => excluded.excludes(scratch.local[k], scratch.local[l]),
+                };
+                let ((x, box_x), (y, box_y)) = (&boxes[k], &boxes[l]);
+                if excludes || box_axis_gap(box_x, box_y) > h {
                     continue;
                 }
-                if closest_points_triangle_triangle(x, y).distance <= h {
-                    out.push((t, u));
+                if within_thickness(x, y, h).is_some() {
+                    scratch.hits.push((k as u32, l as u32));
                 }
             }
         }
+        scratch.hits.sort_unstable();
+        out.extend(
+            scratch
+                .hits
+                .iter()
+                .map(|&(k, l)| (scratch.local[k as usize], scratch.local[l as usize])),
+        );
     }
     probes
 }
@@ -547,6 +586,18 @@ mod tests {
         out
     }
 
+    /// `cloth`'s positions folded flat onto itself at x = 0.1, the folded part 0.01 above.
+    fn folded_flat(cloth: &TriMesh) -> Vec<Vec3> {
+        let fold = |p: &Vec3| {
+            if p.x > 0.1 {
+                Vec3::new(0.2 - p.x, 0.01, p.z)
+            } else {
+                *p
+            }
+        };
+        cloth.positions().iter().map(fold).collect()
+    }
+
     /// Scanning only the patches that may crease finds every folded and collapsed edge that
     /// a scan of every edge finds, with the same sharpness: on a whirled tube (frames that
     /// cut through themselves), a cloth folded flat onto itself, a cloth squeezed in a band
@@ -564,18 +615,7 @@ mod tests {
             whirl.positions(f, &mut p);
             cases.push((tube.clone(), p));
         }
-        let folded = cloth
-            .positions()
-            .iter()
-            .map(|p| {
-                if p.x > 0.1 {
-                    Vec3::new(0.2 - p.x, 0.01, p.z)
-                } else {
-                    *p
-                }
-            })
-            .collect();
-        cases.push((cloth.clone(), folded));
+        cases.push((cloth.clone(), folded_flat(&cloth)));
         let squeezed = cloth
             .positions()
             .iter()
@@ -672,5 +712,94 @@ mod tests {
             "own frame: by area, {own:?}"
         );
         assert!(seen[1] > 2.0 * seen[0], "the far half moved more: {seen:?}");
+    }
+
+    /// Each crease probe reports exactly the pairs of triangles within two rings of its edge
+    /// that a scan of every such pair finds (not excluded, at most the thickness apart by the
+    /// exact distance), in that scan's order: on a cloth folded flat onto itself and on frames
+    /// of a whirled tube, with the surface's cached exclusion (two rings) and with a ring walk
+    /// (three rings).
+    #[test]
+    fn crease_probes_report_what_a_scan_of_every_pair_finds() {
+        use rand::SeedableRng;
+        let cloth = generate::cloth_grid(1.0, 1.0, 40, 40);
+        let folded = folded_flat(&cloth);
+        let tube = generate::tube(0.08, 2.0, 24, 160, true);
+        let whirl = Whirl::new(&tube, 60, 2);
+        let mut cases = vec![(cloth, folded, 0.02f32)];
+        for f in [20, 30, 45] {
+            let mut p = Vec::new();
+            whirl.positions(f, &mut p);
+            cases.push((tube.clone(), p, 0.02));
+        }
+        let mut total = 0;
+        for (k, (mesh, positions, thickness)) in cases.into_iter().enumerate() {
+            let mut surface = TrackedSurface::new(mesh);
+            surface.set_positions(&positions).unwrap();
+            for rings in [2, 3] {
+                let excluded = surface.excluded_pairs(rings);
+                assert_eq!(
+                    matches!(excluded, ExcludedPairs::Cached(_)),
+                    rings == 2,
+                    "both kinds of exclusion are tried"
+                );
+                let request = DrawRequest {
+                    sampling: Sampling::Hierarchy,
+                    count: 0,
+                    self_mode: true,
+                    excluded_pairs: Some(excluded),
+                    thickness,
+                    margin: thickness,
+                    previous_pose: None,
+                    candidate_allowance: None,
+                };
+                let placed = Placed {
+                    surface: &surface,
+                    pose: None,
+                };
+                let mut scratch = SamplerScratch::default();
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(k as u64);
+                let mut found = Vec::new();
+                let probes =
+                    crease_probes(12, &placed, &request, &mut rng, &mut scratch, &mut found);
+                assert!(probes > 0, "case {k}: sharp edges to probe");
+                // The reference: the same edges, every pair of the triangles within two rings.
+                let topo = surface.topology();
+                let mut expected = Vec::new();
+                for &(_, edge, _) in &scratch.sharp[..probes] {
+                    let mut near: Vec<u32> = topo.edge(edge).vertices.to_vec();
+                    for _ in 0..2 {
+                        let next: Vec<u32> = near
+                            .iter()
+                            .flat_map(|&v| topo.vertex_neighbours(v).iter().copied())
+                            .collect();
+                        near.extend(next);
+                        near.sort_unstable();
+                        near.dedup();
+                    }
+                    let mut local: Vec<u32> = near
+                        .iter()
+                        .flat_map(|&v| topo.vertex_triangles(v).iter().copied())
+                        .collect();
+                    local.sort_unstable();
+                    local.dedup();
+                    for (i, &t) in local.iter().enumerate() {
+                        for &u in &local[i + 1..] {
+                            let d = closest_points_triangle_triangle(
+                                &placed.triangle(t),
+                                &placed.triangle(u),
+                            )
+                            .distance;
+                            if !excluded.excludes(t, u) && d <= f64::from(thickness) {
+                                expected.push((t, u));
+                            }
+                        }
+                    }
+                }
+                assert_eq!(found, expected, "case {k}, {rings} rings");
+                total += found.len();
+            }
+        }
+        assert!(total > 50, "{total} pairs found: the probes meet folds");
     }
 }
