@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run --release --example tracking_quality -- [--mesh PATH|generated:NAME]
-//!     [--motion whirl|crumple] [--frames 120] [--seed S] [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
+//!     [--motion whirl|crumple|local] [--frames 120] [--seed S] [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
 //!     [--sweep a,b,c | --no-sweep] [--sampling hierarchy|uniform|velocity] [--search two-step|full]
 //!     [--patch-size N]
 //! ```
@@ -17,7 +17,8 @@
 //! `generated:cloth` (a 7200-triangle sheet)) is animated by a seeded [`Whirl`] (its halves
 //! wind around an axis in opposite senses until they cut through each other, then unwind, in
 //! episodes) or with `--motion crumple` a [`Crumple`] (folded like paper, two folds at a
-//! time). Each run is labelled training or held out (`TRAINING_MESHES`, `TRAINING_SEEDS`:
+//! time), or with `--motion local` the whirl within a ball around one seeded vertex
+//! ([`Local`], of radius `LOCAL_RADIUS` of the box's diagonal), the rest at rest. Each run is labelled training or held out (`TRAINING_MESHES`, `TRAINING_SEEDS`:
 //! what the tracker's constants were chosen on). Every frame, the exact pass
 //! ([`self_contacts_excluding`], after a refit) finds every pair of triangles closer than the
 //! thickness (a tenth of the mean edge length) that are not adjacent in the tracker's sense
@@ -64,7 +65,7 @@ use plotters::prelude::*;
 use stochastic_collision::bvh::{
     CollisionMesh, QueryWorkspace, SelfContact, self_contacts_excluding,
 };
-use stochastic_collision::deform::{Animation, Crumple, Whirl};
+use stochastic_collision::deform::{Animation, Crumple, Local, Whirl};
 use stochastic_collision::geometry::closest_points_triangle_triangle;
 use stochastic_collision::mesh::{SelfExclusion, Topology, TriMesh, generate};
 use stochastic_collision::tracking::{
@@ -102,7 +103,22 @@ const LATENCY_LIMIT: usize = 3;
 enum Motion {
     Whirl,
     Crumple,
+    /// The whirl within a ball around one vertex ([`Local`]); the rest of the mesh rests.
+    Local,
 }
+
+impl Motion {
+    fn name(self) -> &'static str {
+        match self {
+            Motion::Whirl => "whirl",
+            Motion::Crumple => "crumple",
+            Motion::Local => "local",
+        }
+    }
+}
+
+/// `--motion local`: the ball's radius, as a fraction of the mesh box's diagonal.
+const LOCAL_RADIUS: f32 = 0.15;
 
 struct Settings {
     mesh: Option<PathBuf>,
@@ -154,7 +170,8 @@ fn parse_args() -> Result<Settings, String> {
                 s.motion = match text(it.next(), "--motion")?.as_str() {
                     "whirl" => Motion::Whirl,
                     "crumple" => Motion::Crumple,
-                    o => return Err(format!("unknown motion `{o}` (whirl|crumple)")),
+                    "local" => Motion::Local,
+                    o => return Err(format!("unknown motion `{o}` (whirl|crumple|local)")),
                 }
             }
             "--frames" => s.frames = number(it.next(), "--frames")?.max(1) as usize,
@@ -910,6 +927,12 @@ fn main() {
             let n = c.episodes().len();
             (Box::new(c), n)
         }
+        Motion::Local => {
+            let w = Whirl::new(&mesh, settings.frames, settings.seed);
+            let n = w.episodes().len();
+            let l = Local::new(&mesh, w, LOCAL_RADIUS, settings.seed);
+            (Box::new(l), n)
+        }
     };
     let whirl = whirl.as_ref();
     let training = is_training(&name, settings.seed);
@@ -928,11 +951,7 @@ fn main() {
         Topology::new(&mesh).non_manifold_edge_count(),
         settings.frames,
         episodes,
-        if settings.motion == Motion::Crumple {
-            "crumple"
-        } else {
-            "whirl"
-        },
+        settings.motion.name(),
         config.thickness,
         tolerance
     );
@@ -1122,11 +1141,7 @@ fn main() {
         "{{\"mesh\": \"{}\", \"split\": \"{}\", \"motion\": \"{}\", \"triangles\": {}, \"frames\": {}, \"seed\": {}, \"thickness\": {}, \"tolerance\": {}, {}, \"sweep\": [{}]}}\n",
         name.replace('\\', "\\\\").replace('"', "\\\""),
         if training { "training" } else { "held_out" },
-        if settings.motion == Motion::Crumple {
-            "crumple"
-        } else {
-            "whirl"
-        },
+        settings.motion.name(),
         mesh.triangle_count(),
         settings.frames,
         settings.seed,

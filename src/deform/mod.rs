@@ -13,14 +13,19 @@
 //! angle that grows to about a half turn (some past it, cutting through the sheet) and
 //! returns, so flaps come down onto the sheet and onto each other in layers.
 //!
-//! Both implement [`Animation`]: a number of frames and the positions at each.
+//! [`Local`] confines another animation to a ball around one vertex: the rest of the mesh
+//! stays where it is, as in a scene where one part of a large surface is worked on.
+//!
+//! They implement [`Animation`]: a number of frames and the positions at each.
 //!
 //! Next: [`crate::tracking`], which these deformations exercise (`examples/tracking_quality.rs`).
 
 mod crumple;
+mod local;
 mod whirl;
 
 pub use crumple::{Crumple, CrumpleFold};
+pub use local::Local;
 pub use whirl::{Whirl, WhirlEpisode};
 
 use glam::Vec3;

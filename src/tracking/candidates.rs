@@ -1,6 +1,6 @@
 //! Where new pairs are drawn from, kept between steps: the overlapping patch pairs and the
-//! sharp edges of one surface (self-collision), refreshed where the surface moved, within a
-//! time allowance per step.
+//! sharp edges of one surface (self-collision), refreshed where the surface moved: all of
+//! them at the default settings, within a time allowance per step under a time budget.
 //!
 //! The patch tree is cut into blocks (its subtrees at a depth that gives them about
 //! [`BLOCK_PATCHES`] patches each, at most [`MAX_BLOCK_DEPTH`] levels down). The overlapping
@@ -10,8 +10,10 @@
 //! its patches'). A step refreshes the lists that are the most out of date first (how much
 //! the odometers of their blocks grew since they were made, and for sharp edges those of the
 //! blocks next to it too: an edge's second triangle may lie there), until its allowance is
-//! spent: a surface at rest costs nothing, and a motion in one place refreshes the pairs of
-//! the blocks it reached only. Where no vertex moved, the lists are exact. The lists are only
+//! spent (an allowance of [`Duration::MAX`] is never spent: every list whose blocks moved is
+//! made again, and the lists are those of a search of the whole surface): a surface at rest
+//! costs nothing, and a motion in one place refreshes the pairs of the blocks it reached
+//! only. Where no vertex moved, the lists are exact. The lists are only
 //! where samples start: a pair drawn from an out-of-date list is measured on the current
 //! surface by the local search like any other, so a stale list costs samples, never a wrong
 //! contact.
@@ -91,8 +93,9 @@ impl KeptCandidates {
     }
 
     /// Brings the lists up to date where `surface` moved most, the most out of date first,
-    /// until `allowance` is spent (lists never made, or made with a smaller margin than
-    /// `margin`, are made whatever the allowance); then writes the overlapping patch pairs to
+    /// until `allowance` is spent ([`Duration::MAX`]: every list whose blocks moved; lists
+    /// never made, or made with a smaller margin than `margin`, are made whatever the
+    /// allowance); then writes the overlapping patch pairs to
     /// `overlaps` and the sharp edges to `sharp` (as [`sharp_edges_of`] gives them with no
     /// known contact).
     pub fn refresh(

@@ -96,12 +96,12 @@ pub struct TrackerConfig {
     /// candidates (the step then overruns the budget, and an earlier deadline given to
     /// [`Tracker::step_self_until`](super::Tracker::step_self_until), rather than search
     /// nothing). In self-collision with [`Sampling::Hierarchy`], the candidates (overlapping
-    /// patch pairs, sharp edges) are then kept between steps and brought up to date where the
-    /// surface moved, within a fifth of the budget: the parts of the patch tree whose vertices
-    /// moved most since their lists were made go first, a surface at rest costs nothing, and
-    /// the first step makes every list. Results then depend on the machine's speed; `None`
-    /// (the default): a fixed `pairs_per_frame`, every candidate found anew at each step,
-    /// reproducible.
+    /// patch pairs, sharp edges), which are kept between steps, are then brought up to date
+    /// within a fifth of the budget: the parts of the patch tree whose vertices moved most
+    /// since their lists were made go first, and the first step makes every list. Results
+    /// then depend on the machine's speed; `None` (the default): a fixed `pairs_per_frame`,
+    /// and every kept list whose part of the tree moved is made again at each step (exactly
+    /// the candidates a search of the whole surface finds), reproducible.
     pub time_budget: Option<std::time::Duration>,
     /// Continuous tracking: each step also checks the surfaces over the step, from where
     /// they were at the last step to where they are now (each vertex on a straight line in

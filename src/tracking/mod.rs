@@ -22,11 +22,14 @@
 //! kept ones, each searched for at most [`TrackerConfig::max_iterations`] steps, at most
 //! [`TrackerConfig::propagation_limit`] propagated contacts. The rest of a frame grows with
 //! the mesh: [`TrackedSurface::set_positions`] refits the whole patch tree and every
-//! triangle normal, [`Sampling::Hierarchy`] traverses every overlapping patch pair,
-//! [`Sampling::Velocity`] weighs every triangle, and self-collision's crease probes scan the
-//! edges of every patch that may hold a fold (its normal cone, or its cone with an adjacent
-//! patch's, 45° wide or more) or a collapsed edge: all of a curved tube, only the folded
-//! parts of a sheet. [`StepStats::times`] ([`StepTimes`]) and
+//! triangle normal, and [`Sampling::Velocity`] weighs every triangle. With
+//! [`Sampling::Hierarchy`] (the default), self-collision keeps its candidates between steps
+//! (the overlapping patch pairs and the sharp edges, per part of the patch tree) and finds
+//! them again only where the surface moved: a surface at rest costs nothing there, a motion
+//! in one place the parts it reached (where everything moves, as much as finding them all:
+//! every overlapping patch pair, and the edges of every patch that may hold a fold, its
+//! normal cone, or its cone with an adjacent patch's, 45° wide or more, or a collapsed edge).
+//! Between two meshes the overlapping patch pairs are found anew at each step. [`StepStats::times`] ([`StepTimes`]) and
 //! [`TrackedSurface::update_time`] say where a frame's time went. A deadline ([`Tracker::step_self_until`]) cuts the searching, not that
 //! work. What tracking finds and misses against the exact self-collision pass with the same
 //! exclusion ([`crate::bvh::self_contacts_excluding`] with a [`crate::mesh::SelfExclusion`] of

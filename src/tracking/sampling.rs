@@ -84,7 +84,8 @@ pub(crate) struct DrawRequest<'a> {
     pub previous_pose: Option<PoseF64>,
     /// Hierarchy sampling in self-collision: the candidates (overlapping patch pairs, sharp
     /// edges) are kept between steps and brought up to date where the surface moved most
-    /// within this time ([`KeptCandidates`]); `None`: found anew over the whole surface.
+    /// within this time ([`KeptCandidates`]; [`Duration::MAX`](std::time::Duration::MAX):
+    /// every list whose blocks moved); `None`: found anew over the whole surface.
     pub candidate_allowance: Option<std::time::Duration>,
 }
 

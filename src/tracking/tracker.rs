@@ -1,7 +1,7 @@
 //! The tracker: persistent feature pairs, updated every frame.
 
 use std::collections::{HashMap, HashSet};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::DVec3;
 use rand::SeedableRng;
@@ -115,12 +115,13 @@ pub struct StepStats {
     /// (not among the contacts at its end; they carry a
     /// [`Contact::time_of_impact`]).
     pub crossings: usize,
-    /// Under a time budget, in self-collision with hierarchy sampling: the kept candidate
-    /// lists (pairs of blocks of the patch tree, see [`TrackerConfig::time_budget`]) brought
-    /// up to date in this step: none on a surface at rest, those of the blocks a motion
-    /// reached. 0 when the candidates are found anew (no budget) or none were drawn.
+    /// In self-collision with hierarchy sampling: the kept candidate lists (pairs of blocks of
+    /// the patch tree, see [`TrackerConfig::time_budget`]) brought up to date in this step:
+    /// none on a surface at rest, those of the blocks a motion reached (under a time budget,
+    /// the most out of date of them that its share allowed). 0 between two meshes (their
+    /// candidates are found anew) or when none were drawn.
     pub candidate_lists_refreshed: usize,
-    /// The kept candidate lists there are (0 when the candidates are found anew).
+    /// The kept candidate lists there are (0 between two meshes).
     pub candidate_lists: usize,
     /// Where the step's time went.
     pub times: StepTimes,
@@ -529,10 +530,13 @@ impl Tracker {
             thickness: cfg.thickness,
             margin,
             previous_pose: self.last_relative_pose,
-            candidate_allowance: cfg
-                .time_budget
-                .filter(|_| self_mode)
-                .map(|b| b.mul_f64(CANDIDATE_SHARE)),
+            // In self-collision the candidates are kept between steps: every list whose
+            // blocks moved is made again (exact, reproducible), or under a time budget the
+            // most out of date ones within a share of it.
+            candidate_allowance: self_mode.then(|| {
+                cfg.time_budget
+                    .map_or(Duration::MAX, |b| b.mul_f64(CANDIDATE_SHARE))
+            }),
         };
         draw(
             &request,
