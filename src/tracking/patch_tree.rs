@@ -82,6 +82,37 @@ pub(crate) struct Patch {
     pub cone_sin: f32,
 }
 
+impl Patch {
+    /// Its normal cone from the triangles' unit normals, and its [`Patch::collapsed`] flag
+    /// from its edges at `positions`.
+    fn update_cone(&mut self, triangle_normals: &[Vec3], positions: &[Vec3]) {
+        let patch = self;
+        patch.collapsed = patch.edges.iter().any(|c| {
+            let [v0, v1] = c.vertices;
+            (positions[v0 as usize] - positions[v1 as usize]).length_squared() < c.collapse_below_sq
+        });
+        let normals = patch
+            .triangles
+            .iter()
+            .map(|&t| triangle_normals[t as usize]);
+        let axis = normals.clone().sum::<Vec3>().normalize_or_zero();
+        // Cosine of the largest angle between the axis and a triangle's normal.
+        let mut cos = 1.0f32;
+        if axis == Vec3::ZERO {
+            cos = -1.0;
+        } else {
+            for n in normals {
+                if n != Vec3::ZERO {
+                    cos = cos.min(axis.dot(n));
+                }
+            }
+        }
+        patch.cone_axis = if axis == Vec3::ZERO { Vec3::Y } else { axis };
+        patch.cone_cos = cos.clamp(-1.0, 1.0);
+        patch.cone_sin = (1.0 - patch.cone_cos * patch.cone_cos).max(0.0).sqrt();
+    }
+}
+
 /// A BVH cut off at patches of at most `patch_size` triangles (see the module docs).
 #[derive(Debug, Clone)]
 pub(crate) struct PatchTree {
@@ -92,6 +123,13 @@ pub(crate) struct PatchTree {
     /// The full BVH below the cut (refitted with the patches), for random descents inside a
     /// patch pair down to leaves of a few triangles.
     pub bvh: Bvh,
+    /// The BVH's nodes above the cut (ancestors of a patch's root), descending: children
+    /// before parents.
+    bvh_upper: Vec<u32>,
+    /// Per patch, whether one of its vertices moved in the last [`PatchTree::add_travel`].
+    moved: Vec<bool>,
+    /// Scratch of [`PatchTree::refit_moved`].
+    stack: Vec<u32>,
 }
 
 impl PatchTree {
@@ -114,6 +152,9 @@ impl PatchTree {
             patches: Vec::new(),
             patch_of: vec![0; mesh.triangle_count()],
             bvh: Bvh::build(&TriMesh::new(vec![Vec3::ZERO; 3], vec![[0, 1, 2]]).expect("valid")),
+            bvh_upper: Vec::new(),
+            moved: Vec::new(),
+            stack: Vec::new(),
         };
         // Breadth-first copy so that siblings are adjacent and children follow parents.
         tree.nodes.push(Node {
@@ -154,6 +195,7 @@ impl PatchTree {
                     cone_sin: 0.0,
                 });
             } else {
+                tree.bvh_upper.push(old);
                 let left = tree.nodes.len() as u32;
                 tree.nodes[new].left = left;
                 for c in 0..2 {
@@ -201,6 +243,8 @@ impl PatchTree {
             tree.patches[p].adjacent = nb;
         }
         tree.bvh = bvh;
+        tree.bvh_upper.sort_unstable_by(|a, b| b.cmp(a));
+        tree.moved = vec![true; tree.patches.len()];
         tree.refit(mesh);
         tree
     }
@@ -209,6 +253,37 @@ impl PatchTree {
     /// whose patch roots give the patches' boxes, then the nodes above the cut.
     pub fn refit(&mut self, mesh: &TriMesh) {
         self.bvh.refit(mesh);
+        self.refit_above_patches();
+    }
+
+    /// [`PatchTree::refit`] where the last [`PatchTree::add_travel`] saw a vertex move: the
+    /// BVH below those patches, then everything above the cut (`O(patches)`). The same boxes
+    /// as a full refit, since no box below a patch whose vertices all stayed can change.
+    pub fn refit_moved(&mut self, mesh: &TriMesh) {
+        for (patch, &moved) in self.patches.iter().zip(&self.moved) {
+            if moved {
+                self.bvh.refit_subtree(mesh, patch.node, &mut self.stack);
+            }
+        }
+        self.bvh.refit_inner(&self.bvh_upper);
+        self.refit_above_patches();
+    }
+
+    /// Whether more than half of the patches [moved](PatchTree::moved): then one pass over
+    /// everything ([`PatchTree::refit`], [`PatchTree::update_cones`]) is quicker than one per
+    /// moved patch.
+    pub fn mostly_moved(&self) -> bool {
+        2 * self.moved.iter().filter(|&&m| m).count() > self.patches.len()
+    }
+
+    /// Whether one of patch `p`'s vertices moved in the last [`PatchTree::add_travel`] (every
+    /// patch before the first).
+    pub fn moved(&self, p: usize) -> bool {
+        self.moved[p]
+    }
+
+    /// The patches' boxes from their BVH roots, then the nodes above them.
+    fn refit_above_patches(&mut self) {
         let bn = self.bvh.nodes();
         for patch in &mut self.patches {
             let n = &bn[patch.node as usize];
@@ -232,14 +307,17 @@ impl PatchTree {
     }
 
     /// Adds to each patch's [`Patch::travel`] the farthest move of one of its vertices from
-    /// `previous` to `current` positions (`O(vertices)`).
+    /// `previous` to `current` positions (`O(vertices)`), and notes which patches had a vertex
+    /// move at all ([`PatchTree::moved`]).
     pub fn add_travel(&mut self, previous: &[Vec3], current: &[Vec3]) {
-        for patch in &mut self.patches {
-            let farthest = patch
-                .vertices
-                .iter()
-                .map(|&v| previous[v as usize].distance_squared(current[v as usize]))
-                .fold(0.0, f32::max);
+        for (patch, moved) in self.patches.iter_mut().zip(&mut self.moved) {
+            let mut farthest = 0.0f32;
+            *moved = false;
+            for &v in &patch.vertices {
+                let (a, b) = (previous[v as usize], current[v as usize]);
+                farthest = farthest.max(a.distance_squared(b));
+                *moved |= a != b;
+            }
             patch.travel += (farthest as f64).sqrt();
         }
     }
@@ -299,30 +377,17 @@ impl PatchTree {
     /// [`Patch::collapsed`] flag from its edges at `positions` (`O(triangles)`).
     pub fn update_cones(&mut self, triangle_normals: &[Vec3], positions: &[Vec3]) {
         for patch in &mut self.patches {
-            patch.collapsed = patch.edges.iter().any(|c| {
-                let [v0, v1] = c.vertices;
-                (positions[v0 as usize] - positions[v1 as usize]).length_squared()
-                    < c.collapse_below_sq
-            });
-            let normals = patch
-                .triangles
-                .iter()
-                .map(|&t| triangle_normals[t as usize]);
-            let axis = normals.clone().sum::<Vec3>().normalize_or_zero();
-            // Cosine of the largest angle between the axis and a triangle's normal.
-            let mut cos = 1.0f32;
-            if axis == Vec3::ZERO {
-                cos = -1.0;
-            } else {
-                for n in normals {
-                    if n != Vec3::ZERO {
-                        cos = cos.min(axis.dot(n));
-                    }
-                }
+            patch.update_cone(triangle_normals, positions);
+        }
+    }
+
+    /// [`PatchTree::update_cones`] for the patches that [moved](PatchTree::moved) only (the
+    /// others' normals and edges are as they were).
+    pub fn update_moved_cones(&mut self, triangle_normals: &[Vec3], positions: &[Vec3]) {
+        for (patch, &moved) in self.patches.iter_mut().zip(&self.moved) {
+            if moved {
+                patch.update_cone(triangle_normals, positions);
             }
-            patch.cone_axis = if axis == Vec3::ZERO { Vec3::Y } else { axis };
-            patch.cone_cos = cos.clamp(-1.0, 1.0);
-            patch.cone_sin = (1.0 - patch.cone_cos * patch.cone_cos).max(0.0).sqrt();
         }
     }
 

@@ -145,7 +145,10 @@ impl TrackedSurface {
     }
 
     /// Moves the vertices (same count, all finite), keeps the old positions as the previous
-    /// frame's, and refits the patch tree (boxes and normal cones). On error nothing changes.
+    /// frame's, and refits the patch tree (boxes and normal cones) where a vertex moved: a
+    /// patch whose vertices all stayed keeps its boxes, normals and cone (they cannot have
+    /// changed), so what this costs beyond a scan of the positions follows the part of the
+    /// surface that moved. On error nothing changes.
     pub fn set_positions(&mut self, positions: &[Vec3]) -> Result<(), MeshError> {
         let started = std::time::Instant::now();
         self.previous.clear();
@@ -155,12 +158,28 @@ impl TrackedSurface {
             self.previous.extend_from_slice(self.mesh.positions());
             return Err(e);
         }
-        self.patches.refit(&self.mesh);
-        triangle_normals(&self.mesh, &mut self.normals);
-        self.patches
-            .update_cones(&self.normals, self.mesh.positions());
+        // Only the patches with a vertex that moved are refitted and get new normals and
+        // cones: the rest of the surface costs the scan that finds them. When most of it
+        // moved, one pass over everything is quicker.
         self.patches
             .add_travel(&self.previous, self.mesh.positions());
+        if self.patches.mostly_moved() {
+            self.patches.refit(&self.mesh);
+            triangle_normals(&self.mesh, &mut self.normals);
+            self.patches
+                .update_cones(&self.normals, self.mesh.positions());
+        } else {
+            self.patches.refit_moved(&self.mesh);
+            for (p, patch) in self.patches.patches.iter().enumerate() {
+                if self.patches.moved(p) {
+                    for &t in &patch.triangles {
+                        self.normals[t as usize] = triangle_normal(&self.mesh, t as usize);
+                    }
+                }
+            }
+            self.patches
+                .update_moved_cones(&self.normals, self.mesh.positions());
+        }
         self.max_displacement = self
             .previous
             .iter()
@@ -267,10 +286,14 @@ impl TrackedSurface {
 /// Unit normals of `mesh`'s triangles (zero for degenerate ones), written to `out`.
 fn triangle_normals(mesh: &TriMesh, out: &mut Vec<Vec3>) {
     out.clear();
-    out.extend((0..mesh.triangle_count()).map(|t| {
-        let [a, b, c] = mesh.triangle(t);
-        (b - a).cross(c - a).normalize_or_zero()
-    }));
+    out.extend((0..mesh.triangle_count()).map(|t| triangle_normal(mesh, t)));
+}
+
+/// Triangle `t`'s unit normal (zero for a degenerate triangle).
+#[inline]
+fn triangle_normal(mesh: &TriMesh, t: usize) -> Vec3 {
+    let [a, b, c] = mesh.triangle(t);
+    (b - a).cross(c - a).normalize_or_zero()
 }
 
 /// A surface seen from a frame: its own (`pose == None`) or another mesh's.
@@ -309,7 +332,60 @@ impl Placed<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::deform::{Animation, Local, Whirl};
     use crate::mesh::generate;
+
+    /// After every update, where only a ball of the tube moved, where all of it moved and
+    /// where nothing moved, the surface is what a refit of everything gives: the same BVH
+    /// boxes, patch boxes, normals, normal cones, collapse flags and overlapping patch pairs.
+    #[test]
+    fn the_update_of_the_moved_patches_equals_a_full_one() {
+        let tube = generate::tube(0.1, 2.0, 24, 120, true);
+        let whirl = Whirl::new(&tube, 80, 3);
+        let local = Local::new(&tube, whirl.clone(), 0.12, 5);
+        let mut surface = TrackedSurface::with_patch_size(tube.clone(), 32);
+        let mut p = Vec::new();
+        let mut partial = 0;
+        for (k, frame) in [5, 10, 10, 15, 20, 25, 20, 30].into_iter().enumerate() {
+            if k < 5 {
+                local.positions(frame, &mut p);
+            } else {
+                whirl.positions(frame, &mut p);
+            }
+            surface.set_positions(&p).unwrap();
+            let moved = (0..surface.patches.patches.len())
+                .filter(|&i| surface.patches.moved(i))
+                .count();
+            if moved > 0 && moved < surface.patches.patches.len() {
+                partial += 1;
+            }
+            let mut full = surface.patches.clone();
+            full.refit(&surface.mesh);
+            let mut normals = Vec::new();
+            triangle_normals(&surface.mesh, &mut normals);
+            full.update_cones(&normals, surface.mesh.positions());
+            assert_eq!(surface.normals, normals, "update {k}");
+            let boxes = |b: &crate::bvh::Bvh| -> Vec<(Vec3, Vec3)> {
+                b.nodes().iter().map(|n| (n.min, n.max)).collect()
+            };
+            assert_eq!(boxes(&surface.patches.bvh), boxes(&full.bvh), "update {k}");
+            for (a, b) in surface.patches.patches.iter().zip(&full.patches) {
+                assert_eq!((a.min, a.max), (b.min, b.max), "update {k}");
+                assert_eq!(
+                    (a.cone_axis, a.cone_cos, a.cone_sin, a.collapsed),
+                    (b.cone_axis, b.cone_cos, b.cone_sin, b.collapsed),
+                    "update {k}"
+                );
+            }
+            let overlaps = |t: &PatchTree| {
+                let (mut stack, mut out) = (Vec::new(), Vec::new());
+                t.self_overlaps(0.01, &mut stack, &mut out);
+                out
+            };
+            assert_eq!(overlaps(&surface.patches), overlaps(&full), "update {k}");
+        }
+        assert!(partial >= 3, "{partial} updates moved part of the tube");
+    }
 
     /// The cached exclusion (the first ring count asked for) and the walk (any other) both
     /// answer as `triangles_within_rings`, a triangle with itself included.
