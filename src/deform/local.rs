@@ -10,9 +10,8 @@ use crate::mesh::TriMesh;
 /// Another animation applied within a ball around a seeded vertex only: a vertex within half
 /// the radius follows the inner animation fully, one beyond the radius stays at rest, and in
 /// between it is blended smoothly (`smoothstep`) from one to the other, so the surface stays
-/// whole. The part that moves is about `(2·radius_fraction)³` of the mesh's box, for scenes
-/// where most of a large surface rests while one part of it deforms (a tool working on one
-/// loop of an intestine) and the work per frame should follow that part.
+/// whole. For scenes where most of a large surface rests while one part of it deforms (a tool
+/// working on one loop of an intestine) and the work per frame should follow that part.
 ///
 /// # Example
 /// ```

@@ -19,9 +19,9 @@ pub(crate) struct LocalExclusion {
 }
 
 impl LocalExclusion {
-    /// Prepares the masks of `triangles` under `exclusion`. Returns `false` (and prepares
-    /// nothing) when their lists hold more than 128 distinct vertices: then ask `exclusion`
-    /// pair by pair.
+    /// Prepares the masks of `triangles` under `exclusion`. Returns `false` when their lists
+    /// hold more than 128 distinct vertices (the masks are then not to be used: ask
+    /// `exclusion` pair by pair).
     pub fn build(&mut self, exclusion: &SelfExclusion, triangles: &[u32]) -> bool {
         for &v in &self.used {
             self.bit_of[v as usize] = 0;
