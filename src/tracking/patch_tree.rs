@@ -412,6 +412,7 @@ impl PatchTree {
     /// (`a <= b`), appended to `out`: patches far apart on the surface (not [`Patch::near`]
     /// each other), and patches that are the same or near each other but fold (their normals
     /// leave a half-space; [`PatchTree::update_cones`] must be current).
+    #[cfg(test)]
     pub fn self_overlaps(
         &self,
         margin: f32,
@@ -423,9 +424,11 @@ impl PatchTree {
         self.self_overlaps_from(margin, stack, out);
     }
 
-    /// [`PatchTree::self_overlaps`] below the node pairs on `stack` only (a node with itself:
-    /// the pairs inside its subtree; two nodes: the pairs between their subtrees), which it
-    /// empties. The node pairs given need not meet.
+    /// The candidate patch pairs for self-collision whose boxes come within `margin` (as
+    /// `self_overlaps` finds them from the root, in the tests) below the node pairs on `stack`
+    /// only (a node with itself: the pairs inside its subtree; two nodes: the pairs between
+    /// their subtrees), appended to `out`; `stack` is emptied. The node pairs given need not
+    /// meet.
     pub fn self_overlaps_from(
         &self,
         margin: f32,

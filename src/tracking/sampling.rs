@@ -85,8 +85,8 @@ pub(crate) struct DrawRequest<'a> {
     /// Hierarchy sampling in self-collision: the candidates (overlapping patch pairs, sharp
     /// edges) are kept between steps and brought up to date where the surface moved most
     /// within this time ([`KeptCandidates`]; [`Duration::MAX`](std::time::Duration::MAX):
-    /// every list whose blocks moved); `None`: found anew over the whole surface.
-    pub candidate_allowance: Option<std::time::Duration>,
+    /// every list whose blocks moved). Between two meshes they are found anew.
+    pub candidate_allowance: std::time::Duration,
 }
 
 /// Draws `request.count` new triangle pairs of `a` and `b` into `out`; `known` are the
@@ -150,20 +150,16 @@ pub(crate) fn draw(
         Sampling::Hierarchy => {
             let started = std::time::Instant::now();
             scratch.overlaps.clear();
-            // Self-collision under a time allowance: candidates kept between steps.
-            let kept = self_mode && request.candidate_allowance.is_some();
-            if let (true, Some(allowance)) = (kept, request.candidate_allowance) {
+            // Self-collision: candidates kept between steps.
+            let kept = self_mode;
+            if kept {
                 scratch.kept.refresh(
                     a.surface,
                     margin,
-                    allowance,
+                    request.candidate_allowance,
                     &mut scratch.overlaps,
                     &mut scratch.kept_sharp,
                 );
-            } else if self_mode {
-                a.surface
-                    .patches
-                    .self_overlaps(margin, &mut scratch.stack, &mut scratch.overlaps);
             } else if let Some(rel) = &b.pose {
                 a.surface.patches.pair_overlaps(
                     &b.surface.patches,
@@ -320,19 +316,17 @@ fn crease_probes(
     }
     scratch.near_known.sort_unstable();
     scratch.near_known.dedup();
-    if request.candidate_allowance.is_some() {
-        let near_known = &scratch.near_known;
-        let free = |v: u32| near_known.binary_search(&v).is_err();
-        scratch.sharp.clear();
-        scratch.sharp.extend(
-            scratch
-                .kept_sharp
-                .iter()
-                .filter(|&&(_, edge, _)| topo.edge(edge).vertices.into_iter().all(free)),
-        );
-    } else {
-        sharp_edges(a.surface, &scratch.near_known, &mut scratch.sharp);
-    }
+    // The kept sharp edges (see `KeptCandidates::refresh`), those next to a known contact
+    // left out.
+    let near_known = &scratch.near_known;
+    let free = |v: u32| near_known.binary_search(&v).is_err();
+    scratch.sharp.clear();
+    scratch.sharp.extend(
+        scratch
+            .kept_sharp
+            .iter()
+            .filter(|&&(_, edge, _)| topo.edge(edge).vertices.into_iter().all(free)),
+    );
     // `count` edges drawn at random among the `PROBE_POOL · count` sharpest.
     let sharpest =
         |x: &(f32, u32, bool), y: &(f32, u32, bool)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
@@ -421,7 +415,9 @@ fn crease_probes(
 /// remaining fraction of the rest length mapped to [-1, 0); edge; collapsed rather than
 /// folded), written to `out` in no particular order. Only the edges of patches that
 /// [may crease](super::patch_tree::PatchTree::may_crease) are looked at: the same set as a
-/// scan of every edge, at a cost that follows the folded part of the surface.
+/// scan of every edge, at a cost that follows the folded part of the surface. The tests'
+/// reference for the kept sharp edges (the tracker keeps them per part of the patch tree).
+#[cfg(test)]
 pub(crate) fn sharp_edges(
     surface: &TrackedSurface,
     near_known: &[u32],
@@ -752,13 +748,20 @@ mod tests {
                     thickness,
                     margin: thickness,
                     previous_pose: None,
-                    candidate_allowance: None,
+                    candidate_allowance: std::time::Duration::MAX,
                 };
                 let placed = Placed {
                     surface: &surface,
                     pose: None,
                 };
                 let mut scratch = SamplerScratch::default();
+                scratch.kept.refresh(
+                    &surface,
+                    thickness,
+                    std::time::Duration::MAX,
+                    &mut scratch.overlaps,
+                    &mut scratch.kept_sharp,
+                );
                 let mut rng = Xoshiro256PlusPlus::seed_from_u64(k as u64);
                 let mut found = Vec::new();
                 let probes =

@@ -533,10 +533,9 @@ impl Tracker {
             // In self-collision the candidates are kept between steps: every list whose
             // blocks moved is made again (exact, reproducible), or under a time budget the
             // most out of date ones within a share of it.
-            candidate_allowance: self_mode.then(|| {
-                cfg.time_budget
-                    .map_or(Duration::MAX, |b| b.mul_f64(CANDIDATE_SHARE))
-            }),
+            candidate_allowance: cfg
+                .time_budget
+                .map_or(Duration::MAX, |b| b.mul_f64(CANDIDATE_SHARE)),
         };
         draw(
             &request,
@@ -549,7 +548,7 @@ impl Tracker {
         );
         stats.sampled = s.starts.len();
         stats.patch_overlaps = s.sampler.overlap_count;
-        if request.candidate_allowance.is_some() {
+        if self_mode {
             stats.candidate_lists_refreshed = s.sampler.kept.refreshed;
             stats.candidate_lists = s.sampler.kept.pair_count();
         }
