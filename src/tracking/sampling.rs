@@ -37,7 +37,7 @@ pub(crate) struct SamplerScratch {
     hits: Vec<(u32, u32)>,
     cdf_a: Vec<f64>,
     cdf_b: Vec<f64>,
-    /// Self-collision under a time allowance: the candidates kept between steps.
+    /// Self-collision: the candidates kept between steps.
     pub kept: KeptCandidates,
     /// The kept sharp edges of this step (see [`KeptCandidates::refresh`]).
     kept_sharp: Vec<(f32, u32, bool)>,
