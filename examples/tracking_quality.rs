@@ -4,8 +4,14 @@
 //! cargo run --release --example tracking_quality -- [--mesh PATH|generated:NAME]
 //!     [--motion whirl|crumple|local] [--frames 120] [--seed S] [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
 //!     [--sweep a,b,c | --no-sweep] [--sampling hierarchy|uniform|velocity] [--search two-step|full]
-//!     [--patch-size N]
+//!     [--patch-size N] [--overlaps-per-pair K|none]
 //! ```
+//!
+//! The main run uses the tracker's defaults: at least `--pairs-per-frame` (64) new pairs per
+//! frame, more where the candidates are many (one per `--overlaps-per-pair` overlapping patch
+//! pairs, `TrackerConfig::overlaps_per_pair`; `none`: exactly `--pairs-per-frame`). The sweep
+//! (`--sweep`, by default 16, 32, 64, 128, 256 and `--pairs-per-frame`) runs fixed numbers of
+//! new pairs per frame: what recall each number buys.
 //!
 //! `--budget-us US` gives the tracker a time budget per step (`TrackerConfig::time_budget`):
 //! it adapts its new pairs per frame, starting from `--pairs-per-frame`, to what the budget
@@ -45,7 +51,8 @@
 //! `regions`, `latency_frames_p95` (over the hit regions), `tracker_us_per_frame` (surface
 //! update + step), `exact_us_per_frame` (refit + exact pass), both in thread CPU time (the
 //! machine may be shared), `time_ratio`, `pairs_per_frame` (the configured one, the start under
-//! a budget), `mean_pairs_per_frame` (what the steps drew), `budget_us`, `breakdown_us`
+//! a budget, the least with `overlaps_per_pair`), `mean_pairs_per_frame` (what the steps drew),
+//! `overlaps_per_pair` (of the main run; `null` when its pairs per frame were fixed), `budget_us`, `breakdown_us`
 //! (mean wall-clock µs per frame of the surface update and of each stage of the step:
 //! candidates, sampling, local search, pruning, propagation; `StepTimes`),
 //! and the same for each `sweep` entry. Writes `frames.csv`, `sweep.csv`,
@@ -135,6 +142,8 @@ struct Settings {
     budget_us: Option<u64>,
     /// Largest triangles per patch of the incomplete hierarchy.
     patch_size: u32,
+    /// `TrackerConfig::overlaps_per_pair` of the main run.
+    overlaps_per_pair: Option<u32>,
 }
 
 fn parse_args() -> Result<Settings, String> {
@@ -151,6 +160,7 @@ fn parse_args() -> Result<Settings, String> {
         search: SearchMode::default(),
         budget_us: None,
         patch_size: DEFAULT_PATCH_SIZE,
+        overlaps_per_pair: TrackerConfig::default().overlaps_per_pair,
     };
     let mut explicit_sweep = false;
     let mut it = std::env::args_os().skip(1);
@@ -183,6 +193,14 @@ fn parse_args() -> Result<Settings, String> {
             }
             "--no-sweep" => s.sweep = None,
             "--patch-size" => s.patch_size = number(it.next(), "--patch-size")?.max(1) as u32,
+            "--overlaps-per-pair" => {
+                s.overlaps_per_pair = match text(it.next(), "--overlaps-per-pair")?.as_str() {
+                    "none" => None,
+                    k => Some(k.parse().ok().filter(|&k: &u32| k > 0).ok_or(
+                        "--overlaps-per-pair needs a positive integer or `none`".to_owned(),
+                    )?),
+                }
+            }
             "--budget-us" => {
                 let us = number(it.next(), "--budget-us")?;
                 if us == 0 {
@@ -217,7 +235,7 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --patch-size, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
+                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --patch-size, --overlaps-per-pair, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
                 ));
             }
         }
@@ -962,8 +980,9 @@ fn main() {
         config.exclusion_rings,
         config.thickness + 2.0 * tolerance,
     );
+    // The sweep: fixed numbers of new pairs per frame.
     let mut counts: Vec<usize> = settings.sweep.clone().unwrap_or_default();
-    if !counts.contains(&settings.pairs) {
+    if settings.sweep.is_some() && !counts.contains(&settings.pairs) {
         counts.push(settings.pairs);
         counts.sort_unstable();
     }
@@ -971,6 +990,7 @@ fn main() {
     for (i, &n) in counts.iter().enumerate() {
         let cfg = TrackerConfig {
             pairs_per_frame: n,
+            overlaps_per_pair: None,
             ..config.clone()
         };
         results.push(run_tracker(
@@ -983,11 +1003,24 @@ fn main() {
         ));
         show_progress("tracker sweep", i + 1, counts.len());
     }
-    let main_run = results
+    // The main run: the defaults (or the settings given), the sweep's row when it is the same.
+    let main_config = TrackerConfig {
+        pairs_per_frame: settings.pairs,
+        overlaps_per_pair: settings.overlaps_per_pair,
+        ..config.clone()
+    };
+    let same_as_sweep = results
         .iter()
-        .find(|r| r.pairs_per_frame == settings.pairs)
-        .cloned()
-        .unwrap_or_default();
+        .find(|r| r.pairs_per_frame == settings.pairs && main_config.overlaps_per_pair.is_none());
+    let main_run = match same_as_sweep {
+        Some(r) => r.clone(),
+        None => {
+            let r = run_tracker(&mesh, probe.clone(), whirl, &truth, main_config, tolerance);
+            show_progress("tracker, main run", 1, 1);
+            r
+        }
+    };
+    let adaptive = settings.overlaps_per_pair.is_some() && settings.budget_us.is_none();
 
     println!(
         "{:>8} {:>8} {:>8} {:>8} {:>9} {:>9} {:>9} {:>9} {:>8} {:>9} {:>12} {:>12} {:>7}",
@@ -1005,10 +1038,19 @@ fn main() {
         "exact µs",
         "ratio"
     );
-    for r in &results {
+    let rows = results.iter().map(|r| (r.pairs_per_frame.to_string(), r));
+    let main_label = if adaptive {
+        format!("≥{}", main_run.pairs_per_frame)
+    } else {
+        main_run.pairs_per_frame.to_string()
+    };
+    let main_row = same_as_sweep
+        .is_none()
+        .then_some((main_label.clone(), &main_run));
+    for (label, r) in rows.chain(main_row) {
         println!(
             "{:>8} {:>8.3} {:>8.3} {:>8.3} {:>9} {:>9.1e} {:>8.1e}° {:>9.3} {:>8} {:>9.1} {:>12.0} {:>12.0} {:>7.3}",
-            r.pairs_per_frame,
+            label,
             r.recall,
             r.false_contact_rate,
             r.strict_false_rate,
@@ -1025,9 +1067,17 @@ fn main() {
     }
     println!(
         "per-frame breakdown at {} pairs/f (wall-clock µs, mean): {}",
-        main_run.pairs_per_frame,
+        main_label,
         breakdown(&main_run, |name, us| format!("{name} {us:.0}"))
     );
+    if adaptive {
+        println!(
+            "main run (the defaults): {:.1} new pairs per frame on average (at least {}, one per {} overlapping patch pairs where the surface moved)",
+            main_run.mean_pairs,
+            main_run.pairs_per_frame,
+            settings.overlaps_per_pair.unwrap_or(0)
+        );
+    }
     if let Some(us) = settings.budget_us {
         println!(
             "time budget {us} µs per tracker step: {:.1} new pairs per frame on average (adapted from {})",
@@ -1138,7 +1188,7 @@ fn main() {
         .map(|r| format!("{{{}}}", json_run(r)))
         .collect();
     let json = format!(
-        "{{\"mesh\": \"{}\", \"split\": \"{}\", \"motion\": \"{}\", \"triangles\": {}, \"frames\": {}, \"seed\": {}, \"thickness\": {}, \"tolerance\": {}, {}, \"sweep\": [{}]}}\n",
+        "{{\"mesh\": \"{}\", \"split\": \"{}\", \"motion\": \"{}\", \"triangles\": {}, \"frames\": {}, \"seed\": {}, \"thickness\": {}, \"tolerance\": {}, \"overlaps_per_pair\": {}, {}, \"sweep\": [{}]}}\n",
         name.replace('\\', "\\\\").replace('"', "\\\""),
         if training { "training" } else { "held_out" },
         settings.motion.name(),
@@ -1147,6 +1197,10 @@ fn main() {
         settings.seed,
         config.thickness,
         tolerance,
+        settings
+            .overlaps_per_pair
+            .filter(|_| adaptive)
+            .map_or("null".to_owned(), |k| k.to_string()),
         json_run(&main_run),
         sweep_json.join(", ")
     );

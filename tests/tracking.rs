@@ -589,6 +589,98 @@ fn a_time_budget_adapts_the_pairs_per_frame_to_what_it_allows() {
     check_contacts(tiny.contacts(), &current, &pose, &current, &pose, h);
 }
 
+/// At the default settings the new pairs per frame grow with the candidates where the surface
+/// moved: one per `overlaps_per_pair` overlapping patch pairs in the parts that moved, at least
+/// `pairs_per_frame`, at most `max_active_pairs`; a surface at rest keeps `pairs_per_frame`;
+/// without `overlaps_per_pair` a step draws exactly `pairs_per_frame`. The contacts stay real
+/// either way.
+#[test]
+fn the_default_pairs_per_frame_grow_with_the_overlapping_patch_pairs() {
+    let mesh = generate::tube(0.08, 2.0, 16, 80, true);
+    let mut surface = TrackedSurface::new(mesh.clone());
+    let whirl = Whirl::new(&mesh, 40, 2);
+    let base = TrackerConfig::for_surface(&surface);
+    assert!(base.overlaps_per_pair.is_some(), "on by default");
+    // The tube has 116–236 overlapping patch pairs over these frames.
+    let dense = TrackerConfig {
+        overlaps_per_pair: Some(2),
+        ..base.clone()
+    };
+    let capped = TrackerConfig {
+        overlaps_per_pair: Some(1),
+        max_active_pairs: 100,
+        ..base.clone()
+    };
+    let fixed = TrackerConfig {
+        overlaps_per_pair: None,
+        ..base.clone()
+    };
+    let mut trackers: Vec<_> = [&base, &dense, &capped, &fixed]
+        .into_iter()
+        .map(|c| Tracker::new(c.clone()))
+        .collect();
+    let mut positions = Vec::new();
+    let (mut grew, mut floor, mut cap) = (0, 0, 0);
+    // 24 frames of motion, then 3 at rest.
+    for f in 0..27 {
+        whirl.positions(f.min(23), &mut positions);
+        surface.set_positions(&positions).unwrap();
+        for t in trackers.iter_mut() {
+            t.step_self(&surface);
+            let (stats, cfg) = (t.stats(), t.config());
+            assert!(stats.moved_patch_overlaps <= stats.patch_overlaps);
+            if f == 0 {
+                assert_eq!(stats.moved_patch_overlaps, stats.patch_overlaps, "all new");
+            }
+            if f >= 24 {
+                assert_eq!(stats.moved_patch_overlaps, 0, "at rest");
+            }
+            let expected = match cfg.overlaps_per_pair {
+                Some(k) => cfg.pairs_per_frame.max(
+                    stats
+                        .moved_patch_overlaps
+                        .div_ceil(k as usize)
+                        .min(cfg.max_active_pairs),
+                ),
+                None => cfg.pairs_per_frame,
+            };
+            assert_eq!(stats.pairs_per_frame, expected, "frame {f}: {stats:?}");
+            assert!(
+                stats.sampled <= stats.pairs_per_frame,
+                "frame {f}: {stats:?}"
+            );
+            if cfg.overlaps_per_pair == Some(2) {
+                grew += usize::from(stats.pairs_per_frame > cfg.pairs_per_frame);
+                floor += usize::from(stats.pairs_per_frame == cfg.pairs_per_frame);
+            }
+            if cfg.max_active_pairs == 100 {
+                cap += usize::from(stats.pairs_per_frame == 100);
+                if f >= 24 {
+                    assert_eq!(stats.pairs_per_frame, cfg.pairs_per_frame, "at rest");
+                }
+            }
+        }
+    }
+    assert!(grew > 0, "the coiling tube's candidates raise the pairs");
+    assert!(
+        floor > 0,
+        "the straight tube's few candidates keep the floor"
+    );
+    assert!(cap > 0, "max_active_pairs bounds the pairs");
+    let pose = Pose::IDENTITY;
+    let current = TriMesh::new(positions.clone(), mesh.triangles().to_vec()).unwrap();
+    for t in &trackers {
+        check_contacts(
+            t.contacts(),
+            &current,
+            &pose,
+            &current,
+            &pose,
+            base.thickness,
+        );
+    }
+}
+
 /// In self-collision the candidates are kept between steps and follow the motion, at the
 /// default settings (every list whose blocks moved is made again) and under a time budget
 /// alike: the first step makes every list, a step on a surface at rest refreshes none, a

@@ -78,6 +78,9 @@ pub(crate) struct KeptCandidates {
     stack: Vec<(u32, u32)>,
     /// Block pairs refreshed by the last [`KeptCandidates::refresh`].
     pub refreshed: usize,
+    /// The overlapping patch pairs of the lists the last [`KeptCandidates::refresh`] made
+    /// again (those where the surface moved).
+    pub refreshed_overlaps: usize,
 }
 
 impl KeptCandidates {
@@ -158,6 +161,7 @@ impl KeptCandidates {
         self.order
             .sort_unstable_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
         self.refreshed = 0;
+        self.refreshed_overlaps = 0;
         for i in 0..self.order.len() {
             let (staleness, k) = self.order[i];
             if staleness.is_finite() && self.refreshed > 0 && started.elapsed() >= allowance {
@@ -165,6 +169,7 @@ impl KeptCandidates {
             }
             self.refresh_pair(surface, k as usize, margin);
             self.refreshed += 1;
+            self.refreshed_overlaps += self.pairs[k as usize].overlaps.len();
         }
         overlaps.clear();
         for pair in &self.pairs {

@@ -53,8 +53,21 @@ pub enum SearchMode {
 pub struct TrackerConfig {
     /// New random pairs per frame (the papers' `n`): the pair work of a frame grows linearly
     /// with it, and so does the chance of finding a new contact region (what else a frame
-    /// costs grows with the mesh: see [the module docs](super#what-a-frame-costs)).
+    /// costs grows with the mesh: see [the module docs](super#what-a-frame-costs)). With
+    /// [`TrackerConfig::overlaps_per_pair`] (the default) this is the least a step draws.
     pub pairs_per_frame: usize,
+    /// Hierarchy sampling without a time budget: a step draws at least one new pair per this
+    /// many overlapping patch pairs where the surfaces moved since the last step
+    /// ([`StepStats::moved_patch_overlaps`](super::StepStats::moved_patch_overlaps): the
+    /// candidates it samples among, where new contacts can appear), and at least
+    /// `pairs_per_frame`, at most `max_active_pairs`. A surface with more places where it
+    /// comes close to itself and moves (a larger, more coiled or busier one) gets more
+    /// samples, so that each place is drawn about as often as on a small one; a flat, small or
+    /// resting surface keeps `pairs_per_frame`. `Some(32)`
+    /// by default (chosen on [`TRAINING_MESHES`] and [`TRAINING_SEEDS`]); `None`: exactly
+    /// `pairs_per_frame`. Under [`TrackerConfig::time_budget`] the budget decides instead;
+    /// `pairs_per_frame` 0 draws none.
+    pub overlaps_per_pair: Option<u32>,
     /// Where new pairs come from.
     pub sampling: Sampling,
     /// Local search variant.
@@ -122,6 +135,7 @@ impl Default for TrackerConfig {
     fn default() -> Self {
         TrackerConfig {
             pairs_per_frame: 64,
+            overlaps_per_pair: Some(32),
             sampling: Sampling::default(),
             search: SearchMode::default(),
             max_iterations: 16,

@@ -17,10 +17,14 @@
 //! - [`TrackerConfig`]: pairs per frame, sampling, search variant, thickness, thresholds, seed.
 //!
 //! # What a frame costs
-//! The work on feature pairs is bounded by the configuration, not by the mesh:
-//! [`TrackerConfig::pairs_per_frame`] new pairs, at most [`TrackerConfig::max_active_pairs`]
-//! kept ones, each searched for at most [`TrackerConfig::max_iterations`] steps, at most
-//! [`TrackerConfig::propagation_limit`] propagated contacts. The rest of a frame grows with
+//! The work on feature pairs is bounded by the configuration:
+//! [`TrackerConfig::pairs_per_frame`] new pairs, or by default more where the surfaces come
+//! close to each other in many places (one per [`TrackerConfig::overlaps_per_pair`]
+//! overlapping patch pairs, so that a large, coiled surface is sampled as densely as a small
+//! one; never more than [`TrackerConfig::max_active_pairs`]), at most
+//! [`TrackerConfig::max_active_pairs`] kept ones, each searched for at most
+//! [`TrackerConfig::max_iterations`] steps, at most [`TrackerConfig::propagation_limit`]
+//! propagated contacts. The rest of a frame grows with
 //! the mesh: [`TrackedSurface::set_positions`] refits the whole patch tree and every
 //! triangle normal, and [`Sampling::Velocity`] weighs every triangle. With
 //! [`Sampling::Hierarchy`] (the default), self-collision keeps its candidates between steps

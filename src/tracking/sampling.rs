@@ -43,6 +43,12 @@ pub(crate) struct SamplerScratch {
     kept_sharp: Vec<(f32, u32, bool)>,
     /// Overlapping patch pairs found this frame.
     pub overlap_count: usize,
+    /// Of them, those in a part of the surface that moved since the last frame (self-collision:
+    /// in the kept lists made again); between two meshes, all.
+    pub moved_overlap_count: usize,
+    /// New pairs this frame's [`draw`] was to draw: the request's count, or more with
+    /// [`DrawRequest::overlaps_per_pair`].
+    pub count: usize,
     /// Time spent this frame finding candidates (patch overlaps, covered patch pairs, sharp
     /// edges); the rest of [`draw`] is sampling.
     pub candidates_time: std::time::Duration,
@@ -69,8 +75,13 @@ const DESCENT_TRIES: usize = 8;
 pub(crate) struct DrawRequest<'a> {
     /// Where new pairs come from.
     pub sampling: Sampling,
-    /// How many new pairs to draw.
+    /// How many new pairs to draw (0: none).
     pub count: usize,
+    /// Hierarchy sampling: draw at least one pair per this many overlapping patch pairs, up
+    /// to `count_cap` (see [`TrackerConfig::overlaps_per_pair`](super::TrackerConfig::overlaps_per_pair)).
+    pub overlaps_per_pair: Option<u32>,
+    /// The most pairs `overlaps_per_pair` may ask for.
+    pub count_cap: usize,
     /// One mesh against itself.
     pub self_mode: bool,
     /// Self-collision leaves out these pairs (within the exclusion rings).
@@ -109,6 +120,8 @@ pub(crate) fn draw(
         ..
     } = *request;
     scratch.overlap_count = 0;
+    scratch.moved_overlap_count = 0;
+    scratch.count = n;
     scratch.candidates_time = std::time::Duration::ZERO;
     scratch.kept.refreshed = 0;
     if n == 0 {
@@ -170,6 +183,23 @@ pub(crate) fn draw(
                 );
             }
             scratch.overlap_count = scratch.overlaps.len();
+            // More pairs where many patch pairs are close: in self-collision those where the
+            // surface moved (the lists made again), where new contacts can appear.
+            scratch.moved_overlap_count = if kept {
+                scratch.kept.refreshed_overlaps
+            } else {
+                scratch.overlap_count
+            };
+            let n = match request.overlaps_per_pair {
+                Some(k) => n.max(
+                    scratch
+                        .moved_overlap_count
+                        .div_ceil(k.max(1) as usize)
+                        .min(request.count_cap),
+                ),
+                None => n,
+            };
+            scratch.count = n;
             // Patch pairs that already hold a contact are followed by its pair and by
             // propagation: new samples go where no contact is known yet.
             scratch.covered.clear();
@@ -743,6 +773,8 @@ mod tests {
                 let request = DrawRequest {
                     sampling: Sampling::Hierarchy,
                     count: 0,
+                    overlaps_per_pair: None,
+                    count_cap: 0,
                     self_mode: true,
                     excluded_pairs: Some(excluded),
                     thickness,

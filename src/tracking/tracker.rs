@@ -79,12 +79,17 @@ pub type PairList = SmallVec<[TrackedPair; 16]>;
 /// What the last [`Tracker`] step did.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct StepStats {
-    /// New random pairs the step was to draw (see [`Tracker::pairs_per_frame_now`]).
+    /// New random pairs the step was to draw (see [`Tracker::pairs_per_frame_now`] and
+    /// [`TrackerConfig::overlaps_per_pair`]).
     pub pairs_per_frame: usize,
     /// New random pairs drawn.
     pub sampled: usize,
     /// Overlapping patch pairs of the incomplete hierarchy (hierarchy sampling).
     pub patch_overlaps: usize,
+    /// Of them, those where the surfaces moved since the last step: in self-collision those in
+    /// the kept lists made again (all on the first step, none on a surface at rest); between two
+    /// meshes all of them. [`TrackerConfig::overlaps_per_pair`] counts these.
+    pub moved_patch_overlaps: usize,
     /// Local-search steps over all pairs.
     pub iterations: u64,
     /// Feature-pair distance evaluations.
@@ -232,8 +237,10 @@ impl Tracker {
         self.config = config;
     }
 
-    /// New random pairs the next step draws: [`TrackerConfig::pairs_per_frame`], or under
-    /// [`TrackerConfig::time_budget`] what the budget was found to allow.
+    /// New random pairs the next step draws: [`TrackerConfig::pairs_per_frame`] (at least:
+    /// with [`TrackerConfig::overlaps_per_pair`] a step draws more where the candidates are
+    /// many, [`StepStats::pairs_per_frame`]), or under [`TrackerConfig::time_budget`] what
+    /// the budget was found to allow.
     pub fn pairs_per_frame_now(&self) -> usize {
         if self.config.time_budget.is_some() {
             self.adaptive_pairs
@@ -516,8 +523,6 @@ impl Tracker {
         // and an eighth of them searched, each kept pair searched every eighth step): a
         // tracker that starts late, or stays over its budget, still finds and follows its
         // contacts, only more slowly.
-        let late_fresh = pairs_per_frame.div_ceil(LATE_SHARE);
-        stats.pairs_per_frame = pairs_per_frame;
         stats.cut = passed();
         // Drawing has a cost of its own (hierarchy sampling looks for the overlapping patches
         // of the whole surface): late, it draws every eighth step only.
@@ -525,6 +530,9 @@ impl Tracker {
         let request = DrawRequest {
             sampling: cfg.sampling,
             count: if draw_now { pairs_per_frame } else { 0 },
+            // Without a time budget the pairs per frame grow with the candidates.
+            overlaps_per_pair: cfg.overlaps_per_pair.filter(|_| cfg.time_budget.is_none()),
+            count_cap: cfg.max_active_pairs,
             self_mode,
             excluded_pairs: searcher.excluded_pairs,
             thickness: cfg.thickness,
@@ -547,7 +555,15 @@ impl Tracker {
             &mut s.starts,
         );
         stats.sampled = s.starts.len();
+        let pairs_per_frame = if draw_now {
+            s.sampler.count
+        } else {
+            pairs_per_frame
+        };
+        stats.pairs_per_frame = pairs_per_frame;
+        let late_fresh = pairs_per_frame.div_ceil(LATE_SHARE);
         stats.patch_overlaps = s.sampler.overlap_count;
+        stats.moved_patch_overlaps = s.sampler.moved_overlap_count;
         if self_mode {
             stats.candidate_lists_refreshed = s.sampler.kept.refreshed;
             stats.candidate_lists = s.sampler.kept.pair_count();

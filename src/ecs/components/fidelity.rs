@@ -29,7 +29,11 @@ pub enum Fidelity {
     /// Stochastic closest-feature tracking (contacts with points, normals and depths),
     /// tracking this many feature pairs per frame. Runs in the Tracking stage.
     Tracking {
-        /// Feature pairs tracked per frame and pair.
+        /// New feature pairs drawn per frame and pair: under a time budget
+        /// ([`FrameBudget::Time`](crate::ecs::FrameBudget::Time)) where the tracker starts
+        /// before it adapts to its share, otherwise the least it draws (more where its
+        /// surfaces come close to each other in many places:
+        /// [`TrackerConfig::overlaps_per_pair`](crate::tracking::TrackerConfig::overlaps_per_pair)).
         pairs_per_frame: u32,
     },
     /// World boxes only: the pair collides when the boxes overlap (triggers, far objects).
