@@ -12,7 +12,8 @@ use stochastic_collision::deform::Whirl;
 use stochastic_collision::geometry::{Pose, closest_points_triangle_triangle};
 use stochastic_collision::mesh::{Topology, TriMesh, generate};
 use stochastic_collision::tracking::{
-    Contact, Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig, triangles_within_rings,
+    Contact, Feature, Sampling, SearchMode, TrackedSurface, Tracker, TrackerConfig,
+    triangles_within_rings,
 };
 
 fn tri(mesh: &TriMesh, t: u32, pose: &Pose) -> [DVec3; 3] {
@@ -679,6 +680,206 @@ fn the_default_pairs_per_frame_grow_with_the_overlapping_patch_pairs() {
             base.thickness,
         );
     }
+}
+
+/// The neighbours a local search tries for triangle `t` whose closest feature is `f`: around a
+/// closest corner or edge every triangle at those corners, from a face its edge neighbours.
+fn search_neighbours(topology: &Topology, t: u32, f: Feature) -> Vec<u32> {
+    match f {
+        Feature::Vertex(v) => topology.vertex_triangles(v).to_vec(),
+        Feature::Edge(e) => topology
+            .edge(e)
+            .vertices
+            .iter()
+            .flat_map(|&v| topology.vertex_triangles(v).iter().copied())
+            .collect(),
+        Feature::Triangle(_) => topology.triangle_neighbours(t).to_vec(),
+    }
+}
+
+/// Every pair of `tracker` is up to date on `mesh` at `positions` (its distance is its
+/// triangles' distance now) and, where its search settled apart, no pair the search would try
+/// next (not within the two excluded rings) is closer.
+fn assert_pairs_are_what_a_search_leaves(
+    tracker: &Tracker,
+    mesh: &TriMesh,
+    positions: &[Vec3],
+    what: &str,
+) {
+    let topology = Topology::new(mesh);
+    let current = TriMesh::new(positions.to_vec(), mesh.triangles().to_vec()).unwrap();
+    let triangle = |t: u32| tri(&current, t, &Pose::IDENTITY);
+    let corners = |t: u32| mesh.triangles()[t as usize];
+    let epsilon = 1e-9 * mesh.aabb().extents().length() as f64;
+    for p in tracker.pairs() {
+        let (ta, tb) = (p.triangle_a, p.triangle_b);
+        let d = closest_points_triangle_triangle(&triangle(ta), &triangle(tb)).distance;
+        assert!(
+            (d - p.distance).abs() <= 1e-9 * (1.0 + d),
+            "{what}: pair ({ta}, {tb})'s distance is out of date: {} against {d}",
+            p.distance
+        );
+        if !p.settled || p.distance <= tracker.config().thickness as f64 {
+            continue;
+        }
+        let neighbours = search_neighbours(&topology, ta, p.feature_a)
+            .into_iter()
+            .map(|x| (x, tb))
+            .chain(
+                search_neighbours(&topology, tb, p.feature_b)
+                    .into_iter()
+                    .map(|y| (ta, y)),
+            );
+        for (x, y) in neighbours {
+            if x == y || triangles_within_rings(&topology, corners(x), corners(y), 2) {
+                continue;
+            }
+            let e = closest_points_triangle_triangle(&triangle(x), &triangle(y)).distance;
+            assert!(
+                e >= p.distance - epsilon,
+                "{what}: settled pair ({ta}, {tb}) at {} has a closer neighbour ({x}, {y}) at {e}",
+                p.distance
+            );
+        }
+    }
+}
+
+/// In self-collision a kept pair whose search settled and around which nothing moved is kept
+/// as it is, without a search: on a folded cloth whose far edge flaps under the fold's tip,
+/// the pairs where the fold cuts through the sheet are kept so, and every kept pair is still
+/// what a search would leave. A step with nothing moved keeps every settled pair.
+#[test]
+fn settled_pairs_where_nothing_moved_are_kept_without_a_search() {
+    let (mesh, folded) = folded_cloth(24, 0.1, -0.02);
+    let mut surface = TrackedSurface::new(mesh.clone());
+    // The flat part's far end (under the folded part's tip, 0.008–0.012 below it) flaps.
+    let flap = |f: usize| -> Vec<Vec3> {
+        mesh.positions()
+            .iter()
+            .zip(&folded)
+            .map(|(rest, p)| {
+                if rest.x < -0.25 {
+                    *p + Vec3::Y * (0.004 * (f as f32 * 0.7).sin())
+                } else {
+                    *p
+                }
+            })
+            .collect()
+    };
+    let config = TrackerConfig {
+        seed: 3,
+        ..TrackerConfig::for_surface(&surface)
+    };
+    let mut tracker = Tracker::new(config.clone());
+    let (mut still, mut searched) = (0, 0);
+    for f in 0..40 {
+        let positions = flap(f);
+        surface.set_positions(&positions).unwrap();
+        tracker.step_self(&surface);
+        let stats = tracker.stats();
+        still += stats.still;
+        searched += stats.active.saturating_sub(stats.still);
+        if f == 0 {
+            assert_eq!(stats.still, 0, "nothing is known before the first step");
+        }
+        assert_pairs_are_what_a_search_leaves(&tracker, &mesh, &positions, &format!("frame {f}"));
+        let current = TriMesh::new(positions.clone(), mesh.triangles().to_vec()).unwrap();
+        let pose = Pose::IDENTITY;
+        check_contacts(
+            tracker.contacts(),
+            &current,
+            &pose,
+            &current,
+            &pose,
+            config.thickness,
+        );
+    }
+    assert!(
+        still > 0,
+        "the pairs where the fold cuts the sheet are kept as they are"
+    );
+    assert!(
+        searched > 0,
+        "pairs near the flapping end, and new ones, are searched"
+    );
+    // Nothing moved: every settled pair is kept as it is.
+    let settled = tracker.pairs().iter().filter(|p| p.settled).count();
+    tracker.step_self(&surface);
+    assert_eq!(tracker.stats().still, settled);
+    // Two updates since the last step: what moved in the first is not known, all are searched.
+    surface.set_positions(&flap(7)).unwrap();
+    surface.set_positions(&flap(7)).unwrap();
+    tracker.step_self(&surface);
+    assert_eq!(
+        tracker.stats().still,
+        0,
+        "an update the tracker did not see"
+    );
+}
+
+/// A settled pair apart is searched again when a vertex of a triangle its search tries moves,
+/// though its own triangles stay: a cloth folded flat over itself at a gap of 2.5 thicknesses
+/// settles into pairs apart; one vertex next to such a pair moved halfway to its partner makes
+/// the search move on, and every pair is again what a search would leave.
+#[test]
+fn a_settled_pair_is_searched_again_when_a_neighbour_moves() {
+    let flat = generate::cloth_grid(1.0, 1.0, 24, 24);
+    let mut surface = TrackedSurface::new(flat.clone());
+    let config = TrackerConfig {
+        seed: 5,
+        ..TrackerConfig::for_surface(&surface)
+    };
+    let gap = 2.5 * config.thickness;
+    let mut positions: Vec<Vec3> = flat
+        .positions()
+        .iter()
+        .map(|p| {
+            if p.x > 0.1 {
+                Vec3::new(0.2 - p.x, gap, p.z)
+            } else {
+                *p
+            }
+        })
+        .collect();
+    surface.set_positions(&positions).unwrap();
+    let mut tracker = Tracker::new(config.clone());
+    for _ in 0..6 {
+        tracker.step_self(&surface);
+    }
+    assert!(tracker.contacts().is_empty(), "the sheets are apart");
+    assert_pairs_are_what_a_search_leaves(&tracker, &flat, &positions, "at rest");
+    let settled = tracker.pairs().iter().filter(|p| p.settled).count();
+    tracker.step_self(&surface);
+    assert!(settled > 0, "{:?}", tracker.stats());
+    assert_eq!(
+        tracker.stats().still,
+        settled,
+        "nothing moved: every settled pair kept"
+    );
+    let settled = tracker.pairs().iter().filter(|p| p.settled).count();
+    let topology = Topology::new(&flat);
+    let p = *tracker
+        .pairs()
+        .iter()
+        .find(|p| p.settled)
+        .expect("a settled pair apart");
+    let own = |v: &u32| {
+        flat.triangles()[p.triangle_a as usize].contains(v)
+            || flat.triangles()[p.triangle_b as usize].contains(v)
+    };
+    let v = search_neighbours(&topology, p.triangle_a, p.feature_a)
+        .iter()
+        .flat_map(|&x| flat.triangles()[x as usize])
+        .find(|v| !own(v))
+        .expect("a neighbour vertex");
+    positions[v as usize] = p.point_a.lerp(p.point_b, 0.5).as_vec3();
+    surface.set_positions(&positions).unwrap();
+    tracker.step_self(&surface);
+    assert!(
+        tracker.stats().still < settled,
+        "the moved vertex's neighbours are searched"
+    );
+    assert_pairs_are_what_a_search_leaves(&tracker, &flat, &positions, "a neighbour moved");
 }
 
 /// In self-collision the candidates are kept between steps and follow the motion, at the

@@ -106,7 +106,11 @@ impl Searcher<'_> {
     /// pair farther than the thickness whose neighbourhood touches its partner: descent from
     /// it slides along the sheet into the excluded zone instead of across a gap, so it is not
     /// a contact between distinct parts of the surface).
-    pub fn descend(&self, start: Located, counters: &mut SearchCounters) -> (Located, bool) {
+    ///
+    /// The third value says whether the pair settled: it stopped in contact or with no closer
+    /// neighbour pair, not at `max_iterations` (a settled pair's search ends where it starts
+    /// as long as the triangles around its two triangles stay where they are).
+    pub fn descend(&self, start: Located, counters: &mut SearchCounters) -> (Located, bool, bool) {
         let mut cur = start;
         let mut ca: SmallVec<[u32; 48]> = SmallVec::new();
         let mut cb: SmallVec<[u32; 48]> = SmallVec::new();
@@ -114,7 +118,7 @@ impl Searcher<'_> {
             if cur.cp.distance <= self.thickness {
                 // In contact (nothing is strictly closer than touching): propagation explores
                 // the neighbourhood.
-                break;
+                return (cur, false, true);
             }
             counters.iterations += 1;
             let mut moved = false;
@@ -123,13 +127,13 @@ impl Searcher<'_> {
                     Self::candidates(&self.a, cur.ta, cur.fa, &mut ca);
                     match self.best_of(&cur, ca.iter().map(|&x| (x, cur.tb)), counters) {
                         Step::Moved(n) => (cur, moved) = (n, true),
-                        Step::Sliding => return (cur, true),
+                        Step::Sliding => return (cur, true, false),
                         Step::Stuck => {}
                     }
                     Self::candidates(&self.b, cur.tb, cur.fb, &mut cb);
                     match self.best_of(&cur, cb.iter().map(|&y| (cur.ta, y)), counters) {
                         Step::Moved(n) => (cur, moved) = (n, true),
-                        Step::Sliding => return (cur, true),
+                        Step::Sliding => return (cur, true, false),
                         Step::Stuck => {}
                     }
                 }
@@ -144,16 +148,18 @@ impl Searcher<'_> {
                         .filter(|&p| p != (cur.ta, cur.tb));
                     match self.best_of(&cur, pairs, counters) {
                         Step::Moved(n) => (cur, moved) = (n, true),
-                        Step::Sliding => return (cur, true),
+                        Step::Sliding => return (cur, true, false),
                         Step::Stuck => {}
                     }
                 }
             }
             if !moved {
-                break;
+                return (cur, false, true);
             }
         }
-        (cur, false)
+        // Out of steps; settled only if the last step found the pair in contact.
+        let settled = cur.cp.distance <= self.thickness;
+        (cur, false, settled)
     }
 
     /// The candidate strictly closer than `cur` by more than `epsilon` (the closest; the

@@ -32,6 +32,8 @@ pub struct TrackedSurface {
     generation: u64,
     /// The farthest any vertex moved in the last one.
     max_displacement: f32,
+    /// Per vertex, one bit: whether the last one moved it.
+    moved: Vec<u64>,
     /// The self-collision exclusion of the first ring count asked for (built on first use by
     /// [`TrackedSurface::excluded_pairs`]; it holds for any positions).
     exclusion: std::sync::OnceLock<SelfExclusion>,
@@ -117,6 +119,7 @@ impl TrackedSurface {
                 Some(Box::new((welded, topology)))
             }
         };
+        let mesh_vertex_words = mesh.vertex_count().div_ceil(64);
         TrackedSurface {
             welded,
             previous: mesh.positions().to_vec(),
@@ -130,12 +133,27 @@ impl TrackedSurface {
             update_time: std::time::Duration::ZERO,
             generation: 0,
             max_displacement: 0.0,
+            moved: vec![0; mesh_vertex_words],
             exclusion: std::sync::OnceLock::new(),
             id: {
                 static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
                 NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
             },
         }
+    }
+
+    /// Whether no vertex of a triangle sharing a corner with `t` (`t` included) moved in the
+    /// last successful [`TrackedSurface::set_positions`]: a local search at `t` sees the same
+    /// geometry as before it.
+    pub(crate) fn still_around(&self, t: u32) -> bool {
+        let triangles = self.mesh.triangles();
+        let moved = |v: u32| (self.moved[v as usize / 64] >> (v % 64)) & 1 != 0;
+        triangles[t as usize].iter().all(|&c| {
+            self.topology
+                .vertex_triangles(c)
+                .iter()
+                .all(|&u| !triangles[u as usize].iter().any(|&v| moved(v)))
+        })
     }
 
     /// Names the surface's topology (triangles, patches and edges): the same for a surface and
@@ -180,13 +198,15 @@ impl TrackedSurface {
             self.patches
                 .update_moved_cones(&self.normals, self.mesh.positions());
         }
-        self.max_displacement = self
-            .previous
-            .iter()
-            .zip(self.mesh.positions())
-            .map(|(p, q)| p.distance_squared(*q))
-            .fold(0.0, f32::max)
-            .sqrt();
+        self.moved.fill(0);
+        let mut farthest = 0.0f32;
+        for (i, (p, q)) in self.previous.iter().zip(self.mesh.positions()).enumerate() {
+            if p != q {
+                self.moved[i / 64] |= 1 << (i % 64);
+                farthest = farthest.max(p.distance_squared(*q));
+            }
+        }
+        self.max_displacement = farthest.sqrt();
         self.generation += 1;
         self.update_time = started.elapsed();
         Ok(())

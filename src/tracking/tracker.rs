@@ -71,6 +71,11 @@ pub struct TrackedPair {
     pub vertex_b: u32,
     /// Frames this pair has survived.
     pub age: u32,
+    /// Its last local search settled (in contact, or no neighbour pair closer), rather than
+    /// running out of steps or time: in self-collision, while no vertex around its two
+    /// triangles moves, the next step keeps it as it is without searching
+    /// ([`StepStats::still`]).
+    pub settled: bool,
 }
 
 /// The active pairs of one tracker: inline storage for the common case of a few dozen.
@@ -108,6 +113,10 @@ pub struct StepStats {
     pub cut: bool,
     /// Kept pairs re-measured without a local search because the deadline had passed.
     pub remeasured: usize,
+    /// Self-collision: kept pairs taken as they were, without a search, because their search
+    /// had settled and no vertex of a triangle around their two triangles moved since the
+    /// last step (what the search would find again).
+    pub still: usize,
     /// Continuous tracking ([`TrackerConfig::continuous`]): pairs whose neighbourhoods were
     /// checked over the step.
     pub swept: usize,
@@ -182,6 +191,9 @@ pub struct Tracker {
     /// continuous check) took at the last step; the search stops that much before the
     /// deadline, so that the step ends by it.
     tail: std::time::Duration,
+    /// Self-collision: the surface of the last step ([`TrackedSurface::topology_id`]), with
+    /// the configuration its pairs were searched under unchanged since.
+    last_self_surface: Option<u64>,
 }
 
 /// Where the surfaces were at the start of a step (for the continuous check).
@@ -192,6 +204,20 @@ struct StepStart {
     deformed: [bool; 2],
     /// Two meshes: the second's pose in the first's frame at the start, if known.
     pose_b: Option<PoseF64>,
+    /// Self-collision: what moved since the last step is known ([`Stillness`]).
+    still: Stillness,
+}
+
+/// What a self-collision step knows about the motion since the last step.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Stillness {
+    /// Nothing (two meshes, a first step, another surface, a skipped update, a new
+    /// configuration): every kept pair is searched.
+    Unknown,
+    /// The surface was not updated since: nothing moved.
+    Nothing,
+    /// One update since: the surface's moved vertices say where.
+    LastUpdate,
 }
 
 #[derive(Debug, Default, Clone)]
@@ -220,6 +246,7 @@ impl Tracker {
             last_relative_pose: None,
             last_generations: None,
             tail: std::time::Duration::ZERO,
+            last_self_surface: None,
         }
     }
 
@@ -233,6 +260,9 @@ impl Tracker {
     pub fn set_config(&mut self, config: TrackerConfig) {
         if config.time_budget.is_none() || self.config.time_budget.is_none() {
             self.adaptive_pairs = config.pairs_per_frame.max(1);
+        }
+        if config != self.config {
+            self.last_self_surface = None;
         }
         self.config = config;
     }
@@ -277,6 +307,7 @@ impl Tracker {
         self.contacts.clear();
         self.last_relative_pose = None;
         self.last_generations = None;
+        self.last_self_surface = None;
         self.scratch.sampler.kept = Default::default();
     }
 
@@ -313,13 +344,27 @@ impl Tracker {
             surface,
             pose: None,
         };
+        let still = match (self.last_self_surface, self.last_generations) {
+            (Some(id), Some([g, _])) if id == surface.topology_id() => {
+                if g == surface.generation() {
+                    Stillness::Nothing
+                } else if g + 1 == surface.generation() {
+                    Stillness::LastUpdate
+                } else {
+                    Stillness::Unknown
+                }
+            }
+            _ => Stillness::Unknown,
+        };
         let start = StepStart {
             deformed: self.deformed(surface, surface),
             pose_b: None,
+            still,
         };
         self.step(placed, placed, true, surface.size(), deadline, start);
         self.last_relative_pose = None;
         self.last_generations = Some([surface.generation(); 2]);
+        self.last_self_surface = Some(surface.topology_id());
         &self.contacts
     }
 
@@ -410,7 +455,9 @@ impl Tracker {
         let start = StepStart {
             deformed: self.deformed(a, b),
             pose_b: start_pose,
+            still: Stillness::Unknown,
         };
+        self.last_self_surface = None;
         self.step(pa, pb, false, a.size().max(b.size()), deadline, start);
         self.last_relative_pose = Some(rel);
         self.last_generations = Some([a.generation(), b.generation()]);
@@ -582,10 +629,21 @@ impl Tracker {
         let kept = self
             .pairs
             .iter()
-            .map(|p| (p.triangle_a, p.triangle_b, p.age + 1));
-        let fresh = s.starts.iter().map(|&(x, y)| (x, y, 0));
+            .map(|p| (p.triangle_a, p.triangle_b, p.age + 1, Some(p)));
+        let fresh = s.starts.iter().map(|&(x, y)| (x, y, 0, None));
         let mut fresh_late = 0;
-        for (k, (ta, tb, age)) in kept.chain(fresh).enumerate() {
+        let still = |t: u32| match begin.still {
+            Stillness::Unknown => false,
+            Stillness::Nothing => true,
+            Stillness::LastUpdate => a.surface.still_around(t),
+        };
+        for (k, (ta, tb, age, before)) in kept.chain(fresh).enumerate() {
+            // A settled pair nothing moved around finds itself again: kept as it is.
+            if let Some(p) = before.filter(|p| p.settled && still(ta) && still(tb)) {
+                stats.still += 1;
+                s.pairs.push(TrackedPair { age, ..*p });
+                continue;
+            }
             if searcher.excluded(ta, tb) {
                 continue;
             }
@@ -601,18 +659,21 @@ impl Tracker {
                 continue;
             }
             let start = searcher.locate(ta, tb, &mut counters);
-            let (l, sliding) = if search {
+            let (l, sliding, settled) = if search {
                 searcher.descend(start, &mut counters)
             } else {
                 // Out of time: re-measured where it is (one evaluation), searched later.
                 stats.remeasured += 1;
-                (start, false)
+                (start, false, false)
             };
             if sliding || searcher.sliding(&l) {
                 stats.pruned.sliding += 1;
                 continue;
             }
-            s.pairs.push(tracked(&a, &b, &l, age, self_mode));
+            s.pairs.push(TrackedPair {
+                settled,
+                ..tracked(&a, &b, &l, age, self_mode)
+            });
         }
         stats.iterations = counters.iterations;
         stats.evaluations = counters.evaluations;
@@ -846,6 +907,7 @@ fn tracked(a: &Placed, b: &Placed, l: &Located, age: u32, self_mode: bool) -> Tr
         vertex_a: va,
         vertex_b: vb,
         age,
+        settled: false,
     };
     if self_mode && (l.fb, l.tb) < (l.fa, l.ta) {
         TrackedPair {
