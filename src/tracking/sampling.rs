@@ -393,7 +393,7 @@ fn crease_probes(
         // Most of these pairs are within the excluded rings: one bit test each when the
         // neighbourhood's vertices fit the masks.
         let built = match excluded {
-            ExcludedPairs::Cached(exclusion) => {
+            ExcludedPairs::Cached { exclusion, .. } => {
                 scratch.local_exclusion.build(exclusion, &scratch.local)
             }
             ExcludedPairs::Walk { .. } => false,
@@ -766,7 +766,7 @@ mod tests {
             for rings in [2, 3] {
                 let excluded = surface.excluded_pairs(rings);
                 assert_eq!(
-                    matches!(excluded, ExcludedPairs::Cached(_)),
+                    matches!(excluded, ExcludedPairs::Cached { .. }),
                     rings == 2,
                     "both kinds of exclusion are tried"
                 );

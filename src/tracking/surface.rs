@@ -35,8 +35,9 @@ pub struct TrackedSurface {
     /// Per vertex, one bit: whether the last one moved it.
     moved: Vec<u64>,
     /// The self-collision exclusion of the first ring count asked for (built on first use by
-    /// [`TrackedSurface::excluded_pairs`]; it holds for any positions).
-    exclusion: std::sync::OnceLock<SelfExclusion>,
+    /// [`TrackedSurface::excluded_pairs`]; it holds for any positions), with the patches
+    /// each patch's triangles can be excluded with.
+    exclusion: std::sync::OnceLock<(SelfExclusion, PatchReach)>,
     /// The [welded](TriMesh::welded) mesh and its topology, when welding joins some corners
     /// (seams, poles): rings for the exclusion are counted there.
     welded: Option<Box<(TriMesh, Topology)>>,
@@ -44,12 +45,91 @@ pub struct TrackedSurface {
     id: u64,
 }
 
+/// Per patch, the patches holding a triangle within the exclusion's rings of one of its
+/// triangles (its own included), sorted: two triangles whose patches are not so related are
+/// never excluded, which two small lookups say before the exclusion's lists are read.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PatchReach {
+    offsets: Vec<u32>,
+    patches: Vec<u32>,
+}
+
+impl PatchReach {
+    /// Multi-source walks of `rings` vertex rings from each patch's corners on `topology`
+    /// (the welded mesh's, whose triangles are the surface's, in the same order).
+    fn new(tree: &PatchTree, mesh: &TriMesh, topology: &Topology, rings: u32) -> Self {
+        let mut reach = PatchReach {
+            offsets: vec![0],
+            patches: Vec::new(),
+        };
+        let mut mark = vec![u32::MAX; mesh.vertex_count()];
+        let (mut reached, mut frontier, mut next, mut near) =
+            (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for (p, patch) in tree.patches.iter().enumerate() {
+            let p = p as u32;
+            reached.clear();
+            frontier.clear();
+            for &t in &patch.triangles {
+                for v in mesh.triangles()[t as usize] {
+                    if mark[v as usize] != p {
+                        mark[v as usize] = p;
+                        frontier.push(v);
+                        reached.push(v);
+                    }
+                }
+            }
+            for _ in 0..rings {
+                next.clear();
+                for &v in &frontier {
+                    for &w in topology.vertex_neighbours(v) {
+                        if mark[w as usize] != p {
+                            mark[w as usize] = p;
+                            next.push(w);
+                            reached.push(w);
+                        }
+                    }
+                }
+                std::mem::swap(&mut frontier, &mut next);
+            }
+            near.clear();
+            for &v in &reached {
+                near.extend(
+                    topology
+                        .vertex_triangles(v)
+                        .iter()
+                        .map(|&u| tree.patch_of[u as usize]),
+                );
+            }
+            near.sort_unstable();
+            near.dedup();
+            reach.patches.extend_from_slice(&near);
+            reach.offsets.push(reach.patches.len() as u32);
+        }
+        reach
+    }
+
+    /// Whether a triangle of patch `q` may be within the rings of one of patch `p`.
+    #[inline]
+    fn may_meet(&self, p: u32, q: u32) -> bool {
+        let (s, e) = (
+            self.offsets[p as usize] as usize,
+            self.offsets[p as usize + 1] as usize,
+        );
+        self.patches[s..e].contains(&q)
+    }
+}
+
 /// Which triangle pairs of one surface self-collision leaves out (those within a number of
-/// vertex rings, [`triangles_within_rings`]): one merge of two precomputed lists when the
-/// surface's cached [`SelfExclusion`] has that ring count, else a walk of the topology.
+/// vertex rings, [`triangles_within_rings`]): when the surface's cached [`SelfExclusion`] has
+/// that ring count, two lookups of the triangles' patches ([`PatchReach`]) and, for nearby
+/// patches, one merge of two precomputed lists; else a walk of the topology.
 #[derive(Clone, Copy)]
 pub(crate) enum ExcludedPairs<'a> {
-    Cached(&'a SelfExclusion),
+    Cached {
+        exclusion: &'a SelfExclusion,
+        reach: &'a PatchReach,
+        patch_of: &'a [u32],
+    },
     Walk {
         mesh: &'a TriMesh,
         topology: &'a Topology,
@@ -62,7 +142,14 @@ impl ExcludedPairs<'_> {
     #[inline]
     pub fn excludes(&self, a: u32, b: u32) -> bool {
         match self {
-            ExcludedPairs::Cached(exclusion) => exclusion.excludes(a, b),
+            ExcludedPairs::Cached {
+                exclusion,
+                reach,
+                patch_of,
+            } => {
+                reach.may_meet(patch_of[a as usize], patch_of[b as usize])
+                    && exclusion.excludes(a, b)
+            }
             ExcludedPairs::Walk {
                 mesh,
                 topology,
@@ -251,11 +338,18 @@ impl TrackedSurface {
             Some(welded) => (&welded.0, &welded.1),
             None => (&self.mesh, &self.topology),
         };
-        let cached = self
-            .exclusion
-            .get_or_init(|| SelfExclusion::from_topology(mesh, topology, rings));
+        let (cached, reach) = self.exclusion.get_or_init(|| {
+            (
+                SelfExclusion::from_topology(mesh, topology, rings),
+                PatchReach::new(&self.patches, mesh, topology, rings),
+            )
+        });
         if cached.rings() == rings {
-            ExcludedPairs::Cached(cached)
+            ExcludedPairs::Cached {
+                exclusion: cached,
+                reach,
+                patch_of: &self.patches.patch_of,
+            }
         } else {
             ExcludedPairs::Walk {
                 mesh,
@@ -409,6 +503,58 @@ mod tests {
 
     /// The cached exclusion (the first ring count asked for) and the walk (any other) both
     /// answer as `triangles_within_rings`, a triangle with itself included.
+    /// The patch filter in front of the cached exclusion changes no answer, on a torus of many
+    /// patches (where most patch pairs are far apart) and on the same torus as a triangle soup
+    /// (every corner its own vertex: rings are counted on the welded mesh), for the ring
+    /// count cached and others; and it does filter: most pairs are decided by it alone.
+    #[test]
+    fn the_patch_filter_changes_no_exclusion() {
+        let torus = generate::torus(1.0, 0.3, 24, 12);
+        let soup = TriMesh::new(
+            torus
+                .triangles()
+                .iter()
+                .flat_map(|t| t.map(|v| torus.positions()[v as usize]))
+                .collect(),
+            (0..torus.triangle_count() as u32)
+                .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+                .collect(),
+        )
+        .unwrap();
+        for mesh in [torus.clone(), soup] {
+            let welded = mesh.welded().into_owned();
+            let topology = Topology::new(&welded);
+            for rings in [2, 1, 3] {
+                let surface = TrackedSurface::with_patch_size(mesh.clone(), 8);
+                let ExcludedPairs::Cached {
+                    exclusion,
+                    reach,
+                    patch_of,
+                } = surface.excluded_pairs(rings)
+                else {
+                    panic!("the first ring count asked for is cached");
+                };
+                let n = mesh.triangle_count() as u32;
+                let mut filtered = 0usize;
+                for a in 0..n {
+                    for b in 0..n {
+                        let meet = reach.may_meet(patch_of[a as usize], patch_of[b as usize]);
+                        let excluded = surface.excluded_pairs(rings).excludes(a, b);
+                        assert_eq!(excluded, exclusion.excludes(a, b), "{rings} rings: {a} {b}");
+                        filtered += usize::from(!meet);
+                        if a % 7 == 0 && b % 5 == 0 {
+                            let corners = |t: u32| welded.triangles()[t as usize];
+                            let walk = a == b
+                                || triangles_within_rings(&topology, corners(a), corners(b), rings);
+                            assert_eq!(excluded, walk, "{rings} rings: {a} {b}");
+                        }
+                    }
+                }
+                assert!(filtered > (n * n) as usize / 2, "{rings} rings: {filtered}");
+            }
+        }
+    }
+
     #[test]
     fn excluded_pairs_match_the_ring_walk() {
         let surface = TrackedSurface::new(generate::torus(1.0, 0.3, 12, 8));
@@ -416,7 +562,7 @@ mod tests {
         let n = mesh.triangle_count() as u32;
         for rings in [2, 1, 3, 2] {
             let excluded = surface.excluded_pairs(rings);
-            assert_eq!(matches!(excluded, ExcludedPairs::Cached(_)), rings == 2);
+            assert_eq!(matches!(excluded, ExcludedPairs::Cached { .. }), rings == 2);
             for a in 0..n {
                 for b in 0..n {
                     let corners = |t: u32| mesh.triangles()[t as usize];
