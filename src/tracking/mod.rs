@@ -23,8 +23,9 @@
 //! overlapping patch pairs, so that a large, coiled surface is sampled as densely as a small
 //! one; never more than [`TrackerConfig::max_active_pairs`]), at most
 //! [`TrackerConfig::max_active_pairs`] kept ones, each searched for at most
-//! [`TrackerConfig::max_iterations`] steps, at most [`TrackerConfig::propagation_limit`]
-//! propagated contacts. The rest of a frame grows with
+//! [`TrackerConfig::max_iterations`] steps (in self-collision a kept pair whose search settled
+//! and around which no vertex moved is kept without one, [`StepStats::still`]), at most
+//! [`TrackerConfig::propagation_limit`] propagated contacts. The rest of a frame grows with
 //! the mesh: [`TrackedSurface::set_positions`] refits the whole patch tree and every
 //! triangle normal, and [`Sampling::Velocity`] weighs every triangle. With
 //! [`Sampling::Hierarchy`] (the default), self-collision keeps its candidates between steps
@@ -50,6 +51,7 @@ mod config;
 mod contact;
 mod feature;
 mod local_search;
+mod patch_reach;
 mod patch_tree;
 mod pruning;
 mod sampling;
