@@ -251,30 +251,39 @@ pub(super) fn sort_order(state: &mut BroadPhaseState) {
 }
 
 /// Picks the sweep axis, along which the fat boxes' centres spread most (by the
-/// interquartile range of a sample: one body falling away must not swing the axis), and the
-/// lanes' axis, the next most spread one.
+/// interquartile range of all of them: one body falling away must not swing the axis), and
+/// the lanes' axis, the next most spread one. Every box counts: a sample at a fixed stride can
+/// alias with a regular layout (bodies spawned in rows of 16 and sampled every 16th all share
+/// one coordinate, which then looks like no spread at all).
 fn choose_axes(state: &mut BroadPhaseState, order: &[u32]) {
     if order.len() < 2 {
         return;
     }
-    let step = order.len().div_ceil(64);
     let mut spread = [0.0f32; 3];
-    let mut sample: Vec<f32> = Vec::with_capacity(64);
+    let mut centres: Vec<f32> = Vec::with_capacity(order.len());
     for (axis, s) in spread.iter_mut().enumerate() {
-        sample.clear();
-        sample.extend(
+        centres.clear();
+        centres.extend(
             order
                 .iter()
-                .step_by(step)
                 .map(|&i| state.proxies[i as usize].fat.center()[axis]),
         );
-        sample.sort_unstable_by(f32::total_cmp);
-        let q = |f: f32| sample[((sample.len() - 1) as f32 * f) as usize];
-        *s = q(0.75) - q(0.25);
+        *s = interquartile_range(&mut centres);
     }
     state.axis = (0..3).fold(0, |b, a| if spread[a] > spread[b] { a } else { b });
     let (u, v) = ((state.axis + 1) % 3, (state.axis + 2) % 3);
     state.second = if spread[u] >= spread[v] { u } else { v };
+}
+
+/// The interquartile range of `values` (at least one; reordered).
+fn interquartile_range(values: &mut [f32]) -> f32 {
+    let last = values.len() - 1;
+    let mut quantile = |f: f32| {
+        let k = (last as f32 * f) as usize;
+        *values.select_nth_unstable_by(k, f32::total_cmp).1
+    };
+    let q1 = quantile(0.25);
+    quantile(0.75) - q1
 }
 
 /// A fat box in a lane of the sweep: what the sweep reads of a box, copied in sorted order
@@ -294,3 +303,42 @@ pub(super) struct SweepBox {
 }
 
 const _: () = assert!(std::mem::size_of::<SweepBox>() == 64);
+
+#[cfg(test)]
+mod tests {
+    use super::super::{BroadPhaseState, Proxy};
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn the_axes_follow_the_spread_of_every_box_even_in_rows() {
+        // 1024 boxes in 4 layers (y) of 16 × 16 (x fastest, then z), as bodies are spawned in
+        // rows: they spread along x and z, less along y. Every 16th box in slot order has the
+        // same x: a sample at that stride sees no spread along x and picks y for the lanes.
+        let mut state = BroadPhaseState::default();
+        for i in 0..1024u32 {
+            let (layer, k) = (i / 256, i % 256);
+            let c = Vec3::new(
+                (k % 16) as f32 * 0.6,
+                layer as f32 * 1.2,
+                (k / 16) as f32 * 0.6,
+            );
+            state.proxies.push(Proxy {
+                fat: Aabb::new(c - 0.25, c + 0.25),
+                ..Proxy::default()
+            });
+        }
+        let order: Vec<u32> = (0..1024).collect();
+        choose_axes(&mut state, &order);
+        let mut chosen = [state.axis, state.second];
+        chosen.sort_unstable();
+        assert_eq!(chosen, [0, 2], "sweep and lanes along x and z");
+    }
+
+    #[test]
+    fn the_interquartile_range_ignores_the_outliers() {
+        let mut v = [5.0, 1.0, 2.0, 3.0, 4.0, -1000.0, 1000.0, 2.5, 3.5];
+        assert_eq!(interquartile_range(&mut v), 2.0);
+        assert_eq!(interquartile_range(&mut [7.0]), 0.0);
+    }
+}
