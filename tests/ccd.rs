@@ -68,6 +68,42 @@ fn toi(
     .unwrap()
 }
 
+/// Checks case `k`'s time of impact against the reference on 1,000 sub-steps: never later,
+/// not long before unless the meshes are within the tolerance then, no contact missed, none
+/// where they never come close. `Some(reference time)` when the reference sees a contact.
+fn agrees_with_the_reference(
+    k: usize,
+    (a, ma): (&CollisionMesh, &RigidMotion),
+    (b, mb): (&CollisionMesh, &RigidMotion),
+) -> Option<f32> {
+    let found = toi(a, ma, b, mb);
+    match (reference_time(a, ma, b, mb, 1000), found) {
+        (Some(reference), Some(hit)) => {
+            assert!(
+                hit.time <= reference + 1e-6,
+                "case {k}: {} after {reference}",
+                hit.time
+            );
+            assert!(
+                hit.time >= reference - 1e-4 || distance_at(a, ma, b, mb, hit.time) < 1e-3,
+                "case {k}: {} long before {reference}",
+                hit.time
+            );
+            Some(reference)
+        }
+        (Some(reference), None) => panic!("case {k}: missed the contact at {reference}"),
+        // The sub-steps can miss a graze: then the meshes must come within tolerance.
+        (None, Some(hit)) => {
+            assert!(
+                distance_at(a, ma, b, mb, hit.time) < 1e-3,
+                "case {k}: false contact {hit:?}"
+            );
+            None
+        }
+        (None, None) => None,
+    }
+}
+
 #[test]
 fn a_fast_ball_never_passes_through_a_thin_wall() {
     let ball = CollisionMesh::new(generate::icosphere(0.5, 2));
@@ -190,37 +226,78 @@ fn random_rigid_motions_agree_with_the_reference() {
             Pose::new(v3(&mut rng, 1.0), rot(&mut rng)),
             Pose::new(v3(&mut rng, 1.0), rot(&mut rng)),
         );
-        let found = toi(a, &ma, b, &mb);
-        match (reference_time(a, &ma, b, &mb, 1000), found) {
-            (Some(reference), Some(hit)) => {
+        match agrees_with_the_reference(k, (a, &ma), (b, &mb)) {
+            Some(reference) => {
                 hits += 1;
                 during += (reference > 0.0) as usize;
-                assert!(
-                    hit.time <= reference + 1e-6,
-                    "case {k}: {} after {reference}",
-                    hit.time
-                );
-                assert!(
-                    hit.time >= reference - 1e-4 || distance_at(a, &ma, b, &mb, hit.time) < 1e-3,
-                    "case {k}: {} long before {reference}",
-                    hit.time
-                );
             }
-            (Some(reference), None) => panic!("case {k}: missed the contact at {reference}"),
-            // The sub-steps can miss a graze: then the meshes must come within tolerance.
-            (None, Some(hit)) => {
-                assert!(
-                    distance_at(a, &ma, b, &mb, hit.time) < 1e-3,
-                    "case {k}: false contact {hit:?}"
-                );
-            }
-            (None, None) => misses += 1,
+            None if toi(a, &ma, b, &mb).is_none() => misses += 1,
+            None => {}
         }
     }
     // Contacts that start during the step, not only poses that overlap at its start.
     assert!(
         hits > 40 && during > 20 && misses > 40,
         "{hits} hits ({during} during the step), {misses} misses"
+    );
+}
+
+#[test]
+fn translations_agree_with_the_reference() {
+    // Meshes that do not turn: the search bounds their nodes by slabs too (still in the
+    // frame of the first mesh, or translating in it), on curved and flat, fine and coarse
+    // surfaces; and one that turns against one that does not.
+    let meshes = [
+        CollisionMesh::new(generate::icosphere(0.6, 3)),
+        CollisionMesh::new(generate::torus(0.5, 0.2, 32, 12)),
+        CollisionMesh::new(generate::cuboid(Vec3::new(0.8, 0.3, 0.2), 4)),
+        CollisionMesh::new(generate::cloth_grid(1.2, 1.0, 12, 10)),
+    ];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(29);
+    let v3 = |rng: &mut Xoshiro256PlusPlus, s: f32| {
+        Vec3::new(
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+            rng.random_range(-s..s),
+        )
+    };
+    let (mut hits, mut during) = (0, 0);
+    for k in 0..160 {
+        let (a, b) = (&meshes[k % 4], &meshes[(k / 4) % 4]);
+        let rot = |rng: &mut Xoshiro256PlusPlus| {
+            Quat::from_axis_angle(
+                v3(rng, 1.0).normalize_or(Vec3::X),
+                rng.random_range(0.0..3.0),
+            )
+        };
+        let (ra, rb) = (rot(&mut rng), rot(&mut rng));
+        // B comes from afar towards A (moving too, a little, in every other case).
+        let ma = if k % 2 == 0 {
+            RigidMotion::still(Pose::new(v3(&mut rng, 0.1), ra))
+        } else {
+            RigidMotion::new(
+                Pose::new(v3(&mut rng, 0.3), ra),
+                Pose::new(v3(&mut rng, 0.3), ra),
+            )
+        };
+        let turned = k % 8 == 7;
+        let end_b = if turned {
+            rb * Quat::from_rotation_y(0.4)
+        } else {
+            rb
+        };
+        let mb = RigidMotion::new(
+            Pose::new(v3(&mut rng, 0.4) + Vec3::new(2.5, 0.0, 0.0), rb),
+            Pose::new(v3(&mut rng, 0.6), end_b),
+        );
+        if let Some(reference) = agrees_with_the_reference(k, (a, &ma), (b, &mb)) {
+            hits += 1;
+            during += (reference > 0.0) as usize;
+        }
+    }
+    assert!(
+        hits > 80 && during > 80,
+        "{hits} hits ({during} during the step)"
     );
 }
 

@@ -24,6 +24,7 @@ pub(crate) mod box_test;
 mod build;
 mod collision_mesh;
 mod distance;
+mod node_slabs;
 mod refit;
 mod solid;
 mod surface_point;
@@ -36,6 +37,7 @@ pub use build::BvhBuildOptions;
 pub use collision_mesh::CollisionMesh;
 pub(crate) use collision_mesh::component_labels;
 pub use distance::{MeshDistance, closest_points};
+pub use node_slabs::NodeSlab;
 pub use solid::contains_point;
 pub use surface_point::{SurfacePoint, closest_surface_point};
 pub use traverse_pair::{

@@ -1,7 +1,7 @@
 //! The search for the earliest contact over the step: both trees descended together, node
 //! pairs (over runs of the step's pieces) taken in the order of the earliest time their moving
-//! boxes can meet, so that the search stops as soon as no pair left can meet before the
-//! earliest contact found.
+//! boxes (and, for a mesh that does not turn, their slabs) can meet, so that the search stops
+//! as soon as no pair left can meet before the earliest contact found.
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
@@ -12,7 +12,7 @@ use super::primitive::{
 };
 use super::query::{ImpactFeatures, TimeOfImpact};
 use super::swept::{Span, SweptMesh};
-use super::window::{MovingBox, overlap_window};
+use super::window::{MovingBox, MovingSlab, overlap_window, slab_window};
 use crate::bvh::TrianglePair;
 use crate::geometry::closest_points_segment_segment;
 
@@ -177,6 +177,9 @@ pub(crate) fn search(
     debug_assert!(a.pieces() == b.pieces() || a.pieces().min(b.pieces()) == 1);
     let margin = tol.distance * 1.01;
     let node_margin = margin * growth;
+    // Features within the tolerance in each coordinate are within √3 of it along any
+    // direction: the margin of the slabs' tests.
+    let margins = (node_margin, margin * 3f64.sqrt());
     // The search runs in step time; a piece's tests in piece time.
     let step_tol = PrimitiveTolerances {
         time: tol.time / pieces as f64,
@@ -194,10 +197,11 @@ pub(crate) fn search(
         boxes: (0, 1),
         span: whole,
     };
+    let slabs = (a.node_slab(0, whole), b.node_slab(0, whole));
     push(
         &mut ws.queue,
-        &ws.boxes,
-        node_margin,
+        (&ws.boxes, slabs),
+        margins,
         pieces,
         root,
         (0.0, 1.0),
@@ -243,7 +247,12 @@ pub(crate) fn search(
                         boxes: (n - 2, n - 1),
                         span: half,
                     };
-                    push(&mut ws.queue, &ws.boxes, node_margin, pieces, entry, within);
+                    let slabs = (
+                        a.node_slab(pair.a as usize, half),
+                        b.node_slab(pair.b as usize, half),
+                    );
+                    let arena = (&ws.boxes[..], slabs);
+                    push(&mut ws.queue, arena, margins, pieces, entry, within);
                 }
                 continue;
             }
@@ -264,7 +273,15 @@ pub(crate) fn search(
                 for tb in &ws.leaf_b {
                     let until = limit(&best);
                     let window = (to_piece(pair.from), to_piece(pair.to.min(until)));
-                    if overlap_window(&ta.bounds, &tb.bounds, margin, window).is_none() {
+                    let met =
+                        overlap_window(&ta.bounds, &tb.bounds, margin, window).and_then(|w| {
+                            let (a, b) = (
+                                (&ta.bounds, ta.slab.as_ref()),
+                                (&tb.bounds, tb.slab.as_ref()),
+                            );
+                            slab_window(a, b, margins.1, w)
+                        });
+                    if met.is_none() {
                         continue;
                     }
                     ws.triangle_pairs += 1;
@@ -295,7 +312,16 @@ pub(crate) fn search(
                     span,
                 }
             };
-            push(&mut ws.queue, &ws.boxes, node_margin, pieces, entry, within);
+            let (i, j) = (entry.nodes.0 as usize, entry.nodes.1 as usize);
+            let slabs = (a.node_slab(i, span), b.node_slab(j, span));
+            push(
+                &mut ws.queue,
+                (&ws.boxes, slabs),
+                margins,
+                pieces,
+                entry,
+                within,
+            );
         }
     }
     SearchEnd {
@@ -378,10 +404,11 @@ impl Found {
 }
 
 /// Queues `entry` if its boxes meet within `within` (step time).
+/// `margins`: the boxes' (in the frame's max norm) and the slabs' (Euclidean).
 fn push(
     queue: &mut BinaryHeap<NodePair>,
-    arena: &[MovingBox],
-    margin: f64,
+    (arena, slabs): (&[MovingBox], (Option<MovingSlab>, Option<MovingSlab>)),
+    (margin, slab_margin): (f64, f64),
     pieces: u32,
     entry: Entry,
     within: (f64, f64),
@@ -396,7 +423,12 @@ fn push(
     let to_span = |t: f64| ((t * n - k0) / (k1 - k0)).clamp(0.0, 1.0);
     let to_step = |u: f64| (k0 + u * (k1 - k0)) / n;
     let local = (to_span(within.0), to_span(within.1));
-    if let Some((from, to)) = overlap_window(box_a, box_b, margin, local) {
+    // The boxes' window, narrowed by the slabs where the nodes have them.
+    let window = overlap_window(box_a, box_b, margin, local).and_then(|w| {
+        let (a, b) = ((box_a, slabs.0.as_ref()), (box_b, slabs.1.as_ref()));
+        slab_window(a, b, slab_margin, w)
+    });
+    if let Some((from, to)) = window {
         let (from, to) = (to_step(from), to_step(to));
         if from < within.1 {
             queue.push(NodePair {
@@ -445,17 +477,23 @@ struct LeafTriangle {
     corners: [u32; 3],
     paths: [Trajectory; 3],
     bounds: MovingBox,
+    /// Along the triangle's normal at the piece's start: its plane then, widened as its
+    /// corners move ([`MovingSlab::around`]); `None` for a degenerate triangle.
+    slab: Option<MovingSlab>,
 }
 
 impl LeafTriangle {
     fn new(mesh: &impl SweptMesh, index: u32, piece: u32) -> Self {
         let corners = mesh.triangles()[index as usize];
         let paths = corners.map(|v| mesh.vertex(v, piece));
+        let [p0, p1, p2] = paths.map(|p| p.start);
+        let normal = (p1 - p0).cross(p2 - p0).normalize_or_zero();
         Self {
             index,
             corners,
             paths,
             bounds: MovingBox::around(&paths),
+            slab: (normal != DVec3::ZERO).then(|| MovingSlab::around(normal, &paths)),
         }
     }
 }

@@ -16,7 +16,10 @@
 //! than the last moment the features were more than a stated distance tolerance apart (see
 //! [`CcdOptions`]). Both trees are descended together, node pairs in the order of the earliest
 //! time their moving boxes can meet, and each feature pair is searched only over the times its
-//! own moving boxes meet.
+//! own moving boxes meet. Where a mesh does not turn over the step, its nodes are bounded by
+//! their slabs too ([`NodeSlab`](crate::bvh::NodeSlab): thin where the surface is nearly
+//! flat), and every triangle by its plane: two facing patches' boxes meet long before the
+//! patches do, their slabs only when the patches come within the tolerance.
 //!
 //! The plugin calls [`time_of_impact`] for colliders marked
 //! [`ContinuousCollision`](crate::ecs::ContinuousCollision).

@@ -8,8 +8,8 @@ use glam::{DMat3, DQuat, DVec3, Mat3, Vec3};
 
 use super::primitive::Trajectory;
 use super::query::RigidMotion;
-use super::window::MovingBox;
-use crate::bvh::{Bvh, CollisionMesh};
+use super::window::{MovingBox, MovingSlab};
+use crate::bvh::{Bvh, CollisionMesh, NodeSlab};
 use crate::geometry::{Aabb, PoseF64};
 
 /// A run of consecutive pieces of the step, `[first, end)`.
@@ -32,6 +32,13 @@ pub(crate) trait SweptMesh {
     fn turn_slack(&self, span: Span) -> f64;
     /// Vertex `v`'s straight path over piece `piece`.
     fn vertex(&self, v: u32, piece: u32) -> Trajectory;
+    /// Node `i`'s slab in the step's frame over the pieces of `span`, its bounds moving
+    /// linearly from the span's start to its end so that the node's vertices stay inside it:
+    /// for a rigid mesh that does not turn in that frame; `None` otherwise, or where the node
+    /// has no slab ([`NodeSlab`]).
+    fn node_slab(&self, _i: usize, _span: Span) -> Option<MovingSlab> {
+        None
+    }
 }
 
 /// The frame in which both meshes' node boxes move. A box holds a vertex's path only in a
@@ -80,6 +87,7 @@ pub(crate) struct RigidStep<'a> {
 #[derive(Debug, Default, Clone)]
 pub(crate) struct PoseCache {
     in_frame: Vec<OnceCell<BoxTransform>>,
+    in_frame_f64: Vec<OnceCell<PoseF64>>,
     in_world: Vec<OnceCell<PoseF64>>,
 }
 
@@ -89,6 +97,8 @@ impl PoseCache {
         let boundaries = pieces as usize + 1;
         self.in_frame.clear();
         self.in_frame.resize_with(boundaries, OnceCell::new);
+        self.in_frame_f64.clear();
+        self.in_frame_f64.resize_with(boundaries, OnceCell::new);
         self.in_world.clear();
         self.in_world.resize_with(boundaries, OnceCell::new);
     }
@@ -127,19 +137,27 @@ impl<'a> RigidStep<'a> {
             .get_or_init(|| self.motion.at(self.boundary_time(k)).to_f64())
     }
 
-    fn frame_transform(&self, k: u32) -> &BoxTransform {
-        self.poses.in_frame[k as usize].get_or_init(|| {
+    /// The mesh's pose in the step's frame at boundary `k`.
+    fn frame_pose(&self, k: u32) -> &PoseF64 {
+        self.poses.in_frame_f64[k as usize].get_or_init(|| {
             let pose = *self.world_pose(k);
             match self.frame {
-                BoxFrame::World => BoxTransform::new(pose.rotation, pose.translation),
+                BoxFrame::World => pose,
                 BoxFrame::Mesh(frame) => {
                     let inv = frame.at(self.boundary_time(k)).to_f64().inverse();
-                    BoxTransform::new(
-                        (inv.rotation * pose.rotation).normalize(),
-                        inv.rotation * pose.translation + inv.translation,
-                    )
+                    PoseF64 {
+                        rotation: (inv.rotation * pose.rotation).normalize(),
+                        translation: inv.rotation * pose.translation + inv.translation,
+                    }
                 }
             }
+        })
+    }
+
+    fn frame_transform(&self, k: u32) -> &BoxTransform {
+        self.poses.in_frame[k as usize].get_or_init(|| {
+            let pose = self.frame_pose(k);
+            BoxTransform::new(pose.rotation, pose.translation)
         })
     }
 }
@@ -193,6 +211,42 @@ impl SweptMesh for RigidStep<'_> {
             self.world_pose(piece).transform_point(p),
             self.world_pose(piece + 1).transform_point(p),
         )
+    }
+
+    fn node_slab(&self, i: usize, span: Span) -> Option<MovingSlab> {
+        // A turning mesh's slabs turn with it: not a slab that moves linearly.
+        if !self.own && self.motion.start.rotation != self.motion.end.rotation {
+            return None;
+        }
+        let slab = self.mesh.node_slabs()[i];
+        if !slab.is_bounded() {
+            return None;
+        }
+        // Grown, as the boxes are, for the f32 poses the boundaries are placed at.
+        let pad = |reach: f64| f32::EPSILON as f64 * 32.0 * (1.0 + self.radius + reach);
+        if self.own {
+            // Still in its own frame: its slabs are its tree's own.
+            let p = pad(0.0);
+            return Some(MovingSlab::still(&NodeSlab {
+                lo: slab.lo - p,
+                hi: slab.hi + p,
+                ..slab
+            }));
+        }
+        // Translating without turning: the normal turned into the frame once, the bounds
+        // shifted by the translation along it at the span's ends (in between the vertices move
+        // on straight lines).
+        let (start, end) = (self.frame_pose(span.0), self.frame_pose(span.1));
+        let normal = start.rotation * slab.normal;
+        let bounds = |pose: &PoseF64| {
+            let (shift, p) = (normal.dot(pose.translation), pad(pose.translation.length()));
+            (slab.lo + shift - p, slab.hi + shift + p)
+        };
+        Some(MovingSlab {
+            normal,
+            start: bounds(start),
+            end: bounds(end),
+        })
     }
 }
 

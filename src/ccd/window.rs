@@ -10,6 +10,7 @@
 use glam::DVec3;
 
 use super::primitive::Trajectory;
+use crate::bvh::NodeSlab;
 use crate::geometry::Aabb;
 
 /// A box whose corners move linearly over the piece, from `[lo0, hi0]` to `[lo1, hi1]`.
@@ -117,6 +118,129 @@ pub(crate) fn overlap_window(
     Some((lo, hi))
 }
 
+/// A slab whose bounds move linearly over a run of pieces: `{p : lo(u) ≤ normal · p ≤ hi(u)}`
+/// at time `u` of the run, holding a node's vertices (its [`NodeSlab`] placed in the step's
+/// frame, for a mesh that does not turn there).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct MovingSlab {
+    /// Unit normal.
+    pub normal: DVec3,
+    /// The bounds `(lo, hi)` at the start and at the end of the run.
+    pub start: (f64, f64),
+    pub end: (f64, f64),
+}
+
+impl MovingSlab {
+    /// The slab along the unit `normal` around points moving on `paths`: its bounds at the
+    /// run's ends are the points' least and greatest `normal · p` there. In between, each
+    /// point's `normal · p` moves linearly, so the least of them lies above the chord between
+    /// its ends and the greatest below it: the points stay inside.
+    pub fn around(normal: DVec3, paths: &[Trajectory]) -> Self {
+        let span = |at: &dyn Fn(&Trajectory) -> DVec3| {
+            paths
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                    let d = normal.dot(at(p));
+                    (lo.min(d), hi.max(d))
+                })
+        };
+        Self {
+            normal,
+            start: span(&|p| p.start),
+            end: span(&|p| p.end),
+        }
+    }
+
+    /// A node's slab that stays where it is.
+    pub fn still(slab: &NodeSlab) -> Self {
+        Self {
+            normal: slab.normal,
+            start: (slab.lo, slab.hi),
+            end: (slab.lo, slab.hi),
+        }
+    }
+}
+
+/// An interval whose ends move linearly: `(lo, hi)` at the start and at the end of the run.
+type MovingInterval = [(f64, f64); 2];
+
+/// Where `b` lies along the unit direction `n`: its centre's projection and its half-extent's
+/// both move linearly.
+fn box_along(b: &MovingBox, n: DVec3) -> MovingInterval {
+    let n_abs = n.abs();
+    let at = |lo: DVec3, hi: DVec3| {
+        let (c, r) = (n.dot(0.5 * (lo + hi)), n_abs.dot(0.5 * (hi - lo)));
+        (c - r, c + r)
+    };
+    [at(b.lo0, b.hi0), at(b.lo1, b.hi1)]
+}
+
+/// Where the points of both `b` and `slab` lie along the unit direction `n`: with
+/// `λ = n · m` (`m` the slab's normal), `n · p = λ (m · p) + (n − λ m) · p`, the first term
+/// bounded by the slab and the second by the box. Nearly as thin as the slab when `n` is close
+/// to `±m`: two facing patches' slabs bound them along either normal.
+fn slab_along(slab: &MovingSlab, b: &MovingBox, n: DVec3) -> MovingInterval {
+    let lambda = n.dot(slab.normal);
+    let rest = box_along(b, n - lambda * slab.normal);
+    let at = |(lo, hi): (f64, f64), (r_lo, r_hi): (f64, f64)| {
+        let (x, y) = (lambda * lo, lambda * hi);
+        (x.min(y) + r_lo, x.max(y) + r_hi)
+    };
+    [at(slab.start, rest[0]), at(slab.end, rest[1])]
+}
+
+/// Narrows `window` to the times at which `range` comes within `margin` of `target`.
+fn near_interval(
+    target: MovingInterval,
+    range: MovingInterval,
+    margin: f64,
+    window: (f64, f64),
+) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = window;
+    // The range's top reaches the target's bottom, and its bottom stays below the target's top.
+    let below = (
+        target[0].0 - margin - range[0].1,
+        target[1].0 - margin - range[1].1,
+    );
+    let above = (
+        range[0].0 - target[0].1 - margin,
+        range[1].0 - target[1].1 - margin,
+    );
+    for (g0, g1) in [below, above] {
+        if !keep_nonpositive(&mut lo, &mut hi, g0, g1) {
+            return None;
+        }
+    }
+    Some((lo, hi))
+}
+
+/// The times within `window` at which two nodes, each bounded by its moving box and (where it
+/// has one) its moving slab, can come within Euclidean distance `margin` of each other, as far
+/// as the slabs tell: along each slab's normal, the other node's points (bounded by its box,
+/// and by its slab too where it has one) must come within the margin of the slab. Apply after
+/// [`overlap_window`]: every contact's time lies in both. `None` if there is none; wider than
+/// the true window by a rounding slack, never narrower.
+pub(crate) fn slab_window(
+    (box_a, slab_a): (&MovingBox, Option<&MovingSlab>),
+    (box_b, slab_b): (&MovingBox, Option<&MovingSlab>),
+    margin: f64,
+    window: (f64, f64),
+) -> Option<(f64, f64)> {
+    let mut w = window;
+    for (slab, (other_box, other_slab)) in [(slab_a, (box_b, slab_b)), (slab_b, (box_a, slab_a))] {
+        let Some(slab) = slab else {
+            continue;
+        };
+        let target = [slab.start, slab.end];
+        w = near_interval(target, box_along(other_box, slab.normal), margin, w)?;
+        if let Some(other) = other_slab {
+            let range = slab_along(other, other_box, slab.normal);
+            w = near_interval(target, range, margin, w)?;
+        }
+    }
+    Some(w)
+}
+
 /// Narrows `[lo, hi]` to the times at which `g(s) = g0 + s (g1 − g0)` is not positive; false
 /// when none is left.
 fn keep_nonpositive(lo: &mut f64, hi: &mut f64, g0: f64, g1: f64) -> bool {
@@ -205,6 +329,179 @@ mod tests {
         );
         assert!(overlap_window(&beside, &still, 0.0, (0.0, 1.0)).is_none());
         assert!(overlap_window(&beside, &still, 0.6, (0.0, 1.0)).is_some());
+    }
+
+    #[test]
+    fn a_box_crossing_a_slab_meets_it_while_it_crosses() {
+        // The slab 0 ≤ x ≤ 0.1 (a normal along x), a unit cube from x = -4 to x = 4: it
+        // reaches the slab when its right face is at 0 (centre -0.5, s = 7/16) and leaves it
+        // when its left face passes 0.1 (centre 0.6, s = 4.6/8).
+        let slab = MovingSlab::still(&NodeSlab {
+            normal: DVec3::X,
+            lo: 0.0,
+            hi: 0.1,
+        });
+        let shot = MovingBox::new(
+            &cube(Vec3::new(-4.0, 0.0, 0.0)),
+            &cube(Vec3::new(4.0, 0.0, 0.0)),
+        );
+        let wide = MovingBox::new(
+            &cube(Vec3::ZERO).inflated(9.0),
+            &cube(Vec3::ZERO).inflated(9.0),
+        );
+        let (lo, hi) = slab_window((&wide, Some(&slab)), (&shot, None), 0.0, (0.0, 1.0)).unwrap();
+        assert!((lo - 3.5 / 8.0).abs() < 1e-8 && lo <= 3.5 / 8.0, "{lo}");
+        assert!((hi - 4.6 / 8.0).abs() < 1e-8 && hi >= 4.6 / 8.0, "{hi}");
+        // Either side may hold the slab.
+        let swapped = slab_window((&shot, None), (&wide, Some(&slab)), 0.0, (0.0, 1.0));
+        assert_eq!(swapped, Some((lo, hi)));
+        // A tilted slab 2 units out along its normal, which the cube reaches to 0.7 of: never met
+        // without a margin, met with 1.4.
+        let tilted = MovingSlab::still(&NodeSlab {
+            normal: DVec3::new(0.0, 0.6, 0.8),
+            lo: 2.0,
+            hi: 2.0,
+        });
+        assert!(slab_window((&wide, Some(&tilted)), (&shot, None), 0.0, (0.0, 1.0)).is_none());
+        assert!(slab_window((&wide, Some(&tilted)), (&shot, None), 1.4, (0.0, 1.0)).is_some());
+    }
+
+    #[test]
+    fn two_facing_slabs_meet_when_the_slabs_do_not_when_the_boxes_do() {
+        // Two thin tilted patches, one still and one moving straight at it: their boxes meet
+        // long before the patches' slabs do.
+        let n = DVec3::new(1.0, 1.0, 0.0).normalize();
+        let patch = |along: f64| -> Vec<DVec3> {
+            let (u, v) = (DVec3::new(-1.0, 1.0, 0.0).normalize(), DVec3::Z);
+            [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+                .map(|(a, b)| n * along + u * a + v * b)
+                .to_vec()
+        };
+        let slab_of = |points: &[DVec3]| {
+            let d: Vec<f64> = points.iter().map(|p| n.dot(*p)).collect();
+            (
+                d.iter().copied().fold(f64::INFINITY, f64::min),
+                d.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            )
+        };
+        let still = patch(0.0);
+        let box_of = |points: &[DVec3]| {
+            MovingBox::around(
+                &points
+                    .iter()
+                    .map(|p| Trajectory::new(*p, *p))
+                    .collect::<Vec<_>>(),
+            )
+        };
+        let a = (
+            box_of(&still),
+            MovingSlab {
+                normal: n,
+                start: slab_of(&still),
+                end: slab_of(&still),
+            },
+        );
+        // The other patch from 3 units away along n to 1 unit past it (contact at s = 3/4),
+        // its normal the opposite one.
+        let (from, to) = (patch(3.0), patch(-1.0));
+        let paths: Vec<Trajectory> = from
+            .iter()
+            .zip(&to)
+            .map(|(p, q)| Trajectory::new(*p, *q))
+            .collect();
+        let (f, t) = (slab_of(&from), slab_of(&to));
+        let b = (
+            MovingBox::around(&paths),
+            MovingSlab {
+                normal: -n,
+                start: (-f.1, -f.0),
+                end: (-t.1, -t.0),
+            },
+        );
+        let boxes = overlap_window(&a.0, &b.0, 0.0, (0.0, 1.0)).unwrap();
+        assert!(boxes.0 < 0.5, "the boxes meet early ({boxes:?})");
+        let both = slab_window((&a.0, Some(&a.1)), (&b.0, Some(&b.1)), 0.0, boxes).unwrap();
+        assert!((both.0 - 0.75).abs() < 1e-8 && both.0 <= 0.75, "{both:?}");
+    }
+
+    #[test]
+    fn points_near_each_other_lie_in_the_slab_window() {
+        // A still group of points and a moving one, each with a slab along a random normal (the
+        // moving one's bounds following its points): at every time at which a moving point
+        // comes within the margin of a still one, the window holds.
+        let mut seed = 777u64;
+        let mut next = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 4.0 - 2.0
+        };
+        let mut checked = 0;
+        for case in 0..400 {
+            let still: Vec<DVec3> = (0..4)
+                .map(|_| DVec3::new(next(), next(), next()) * 0.5)
+                .collect();
+            let (na, nb) = (
+                DVec3::new(next(), next(), next()).normalize(),
+                DVec3::new(next(), next(), next()).normalize(),
+            );
+            let span = |n: DVec3, points: &mut dyn Iterator<Item = DVec3>| {
+                points.fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                    (l.min(n.dot(p)), h.max(n.dot(p)))
+                })
+            };
+            let a_slab = span(na, &mut still.iter().copied());
+            let offset = DVec3::new(next(), next(), next());
+            let moving: Vec<Trajectory> = (0..3)
+                .map(|_| {
+                    // A rigid translation (so that a slab moves with its points), or not.
+                    let p = DVec3::new(next(), next(), next());
+                    if case % 2 == 0 {
+                        Trajectory::new(p, p + offset)
+                    } else {
+                        Trajectory::new(p, DVec3::new(next(), next(), next()))
+                    }
+                })
+                .collect();
+            let b_slab = MovingSlab {
+                normal: nb,
+                start: span(nb, &mut moving.iter().map(|q| q.start)),
+                end: span(nb, &mut moving.iter().map(|q| q.end)),
+            };
+            let a = (
+                MovingBox::around(
+                    &still
+                        .iter()
+                        .map(|p| Trajectory::new(*p, *p))
+                        .collect::<Vec<_>>(),
+                ),
+                MovingSlab {
+                    normal: na,
+                    start: a_slab,
+                    end: a_slab,
+                },
+            );
+            let b_box = MovingBox::around(&moving);
+            // The moving slab holds its points at every time only for a translation.
+            let b_slab = (case % 2 == 0).then_some(&b_slab);
+            let window = overlap_window(&a.0, &b_box, 0.3, (0.0, 1.0))
+                .and_then(|w| slab_window((&a.0, Some(&a.1)), (&b_box, b_slab), 0.3, w));
+            for k in 0..=100 {
+                let s = k as f64 / 100.0;
+                let close = still
+                    .iter()
+                    .any(|p| moving.iter().any(|q| (*p - q.at(s)).length() <= 0.3));
+                if close {
+                    checked += 1;
+                    let (lo, hi) = window.expect("a window where points come close");
+                    assert!(lo <= s && s <= hi, "case {case}: {s} outside [{lo}, {hi}]");
+                }
+            }
+        }
+        assert!(
+            checked > 100,
+            "the cases come close often enough ({checked})"
+        );
     }
 
     #[test]
