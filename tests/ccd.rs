@@ -68,6 +68,15 @@ fn toi(
     .unwrap()
 }
 
+/// A random vector in the cube `[-s, s)³`.
+fn v3(rng: &mut Xoshiro256PlusPlus, s: f32) -> Vec3 {
+    Vec3::new(
+        rng.random_range(-s..s),
+        rng.random_range(-s..s),
+        rng.random_range(-s..s),
+    )
+}
+
 /// Checks case `k`'s time of impact against the reference on 1,000 sub-steps: never later,
 /// not long before unless the meshes are within the tolerance then, no contact missed, none
 /// where they never come close. `Some(reference time)` when the reference sees a contact.
@@ -202,13 +211,6 @@ fn random_rigid_motions_agree_with_the_reference() {
         CollisionMesh::new(generate::icosphere(0.3, 2)),
     ];
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(17);
-    let v3 = |rng: &mut Xoshiro256PlusPlus, s: f32| {
-        Vec3::new(
-            rng.random_range(-s..s),
-            rng.random_range(-s..s),
-            rng.random_range(-s..s),
-        )
-    };
     let (mut hits, mut misses, mut during) = (0, 0, 0);
     for k in 0..240 {
         let (a, b) = (&meshes[k % 3], &meshes[(k / 3) % 3]);
@@ -254,13 +256,6 @@ fn translations_agree_with_the_reference() {
         CollisionMesh::new(generate::cloth_grid(1.2, 1.0, 12, 10)),
     ];
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(29);
-    let v3 = |rng: &mut Xoshiro256PlusPlus, s: f32| {
-        Vec3::new(
-            rng.random_range(-s..s),
-            rng.random_range(-s..s),
-            rng.random_range(-s..s),
-        )
-    };
     let (mut hits, mut during) = (0, 0);
     for k in 0..160 {
         let (a, b) = (&meshes[k % 4], &meshes[(k / 4) % 4]);
@@ -297,6 +292,57 @@ fn translations_agree_with_the_reference() {
     }
     assert!(
         hits > 80 && during > 80,
+        "{hits} hits ({during} during the step)"
+    );
+}
+
+#[test]
+fn fast_turns_agree_with_the_reference() {
+    // Flat and curved meshes turning by up to 3 rad in the step (long runs of pieces, whose
+    // bounds must hold the arcs; a door hinged far from its centre), against a still or a
+    // translating partner (whose slabs bound its nodes). Half the scenes lie far from the
+    // origin.
+    let meshes = [
+        // A door: a plate hinged at its mesh's origin, far from its own centre.
+        CollisionMesh::new(
+            generate::cuboid(Vec3::new(0.9, 0.02, 0.3), 6)
+                .translated(Vec3::new(1.2, 0.0, 0.0))
+                .expect("finite"),
+        ),
+        CollisionMesh::new(generate::cloth_grid(1.4, 0.6, 14, 6)),
+        CollisionMesh::new(generate::icosphere(0.4, 3)),
+        CollisionMesh::new(generate::torus(0.5, 0.15, 32, 12)),
+    ];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(41);
+    let (mut hits, mut during) = (0, 0);
+    for k in 0..120 {
+        let (a, b) = (&meshes[k % 4], &meshes[(k / 4) % 4]);
+        let axis = v3(&mut rng, 1.0).normalize_or(Vec3::Y);
+        let r0 = Quat::from_axis_angle(v3(&mut rng, 1.0).normalize_or(Vec3::X), 1.0);
+        let spin = Quat::from_axis_angle(axis, rng.random_range(1.0..3.0));
+        let far = if k % 4 < 2 {
+            Vec3::ZERO
+        } else {
+            Vec3::new(7.0, -4.0, 5.0)
+        };
+        let ma = RigidMotion::new(
+            Pose::new(far + v3(&mut rng, 0.2), r0),
+            Pose::new(far + v3(&mut rng, 0.2), spin * r0),
+        );
+        let rb = Quat::from_axis_angle(v3(&mut rng, 1.0).normalize_or(Vec3::Z), 2.0);
+        let at = far + v3(&mut rng, 0.5) + Vec3::new(0.9, 0.0, 0.0);
+        let mb = if k % 2 == 0 {
+            RigidMotion::still(Pose::new(at, rb))
+        } else {
+            RigidMotion::new(Pose::new(at, rb), Pose::new(at - Vec3::X * 0.5, rb))
+        };
+        if let Some(reference) = agrees_with_the_reference(k, (a, &ma), (b, &mb)) {
+            hits += 1;
+            during += (reference > 0.0) as usize;
+        }
+    }
+    assert!(
+        hits > 40 && during > 25,
         "{hits} hits ({during} during the step)"
     );
 }
