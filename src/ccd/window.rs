@@ -120,7 +120,7 @@ pub(crate) fn overlap_window(
 
 /// A slab whose bounds move linearly over a run of pieces: `{p : lo(u) ≤ normal · p ≤ hi(u)}`
 /// at time `u` of the run, holding a node's vertices (its [`NodeSlab`] placed in the step's
-/// frame, for a mesh that does not turn there).
+/// frame, for a mesh that does not turn there) or a triangle's ([`MovingSlab::around`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct MovingSlab {
     /// Unit normal.
