@@ -98,9 +98,9 @@ impl CollisionMesh {
     }
 
     /// Every node's [`NodeSlab`] (index-aligned with [`Bvh::nodes`]) at the current positions:
-    /// made at the first call after the mesh was built or moved, in `O(n log n)` (a few
-    /// milliseconds for 100k triangles). The continuous query reads them for a mesh that does
-    /// not turn over its step.
+    /// made at the first call after the mesh was built or moved, in `O(n log n)` (each
+    /// triangle projected once per level above it). The continuous query reads them for a mesh
+    /// that does not turn over its step.
     pub fn node_slabs(&self) -> &[NodeSlab] {
         self.slabs.get_or_init(|| node_slabs(&self.bvh, &self.mesh))
     }
