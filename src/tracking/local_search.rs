@@ -4,7 +4,7 @@
 use glam::DVec3;
 use smallvec::SmallVec;
 
-use super::boxes::{box_gap, triangle_box};
+use super::boxes::{Box64, box_gap, triangle_box};
 use super::config::SearchMode;
 use super::feature::{Feature, reduce_to_feature};
 use super::surface::{ExcludedPairs, Placed};
@@ -47,6 +47,75 @@ pub(crate) struct Searcher<'a> {
 
 /// A candidate pair with its corners and closest points.
 type Candidate = (u32, u32, [DVec3; 3], [DVec3; 3], ClosestPoints);
+
+/// One side's triangle as [`Searcher::best_of`] reads it: its corners, its box, its extreme
+/// projection on the search direction (the largest for the first side, the smallest for the
+/// second), its unit normal (zero for a degenerate triangle) and its corners' extent along it.
+#[derive(Clone, Copy)]
+struct SideTriangle {
+    corners: [DVec3; 3],
+    bounds: Box64,
+    extreme: f64,
+    normal: DVec3,
+    span: (f64, f64),
+}
+
+impl SideTriangle {
+    /// Triangle `corners`, with its extreme projection on `dir` chosen by `pick`.
+    #[inline]
+    fn new(corners: [DVec3; 3], dir: DVec3, pick: fn(f64, f64) -> f64) -> Self {
+        let [p, q, r] = corners.map(|c| c.dot(dir));
+        let normal = (corners[1] - corners[0])
+            .cross(corners[2] - corners[0])
+            .normalize_or_zero();
+        let [u, v, w] = corners.map(|c| c.dot(normal));
+        SideTriangle {
+            corners,
+            bounds: triangle_box(&corners),
+            extreme: pick(pick(p, q), r),
+            normal,
+            span: (u.min(v).min(w), u.max(v).max(w)),
+        }
+    }
+
+    /// A lower bound of the distance from this triangle to `other`: the gap between the two
+    /// triangles' extents along this one's normal (0 when they overlap). It holds for any
+    /// unit direction, so a nearly degenerate triangle's inexact normal keeps it sound.
+    #[inline]
+    fn plane_gap(&self, other: &[DVec3; 3]) -> f64 {
+        let [p, q, r] = other.map(|c| c.dot(self.normal));
+        let (lo, hi) = self.span;
+        (p.min(q).min(r) - hi).max(lo - p.max(q).max(r)).max(0.0)
+    }
+}
+
+/// The last triangle read on one side, kept while the candidates keep it.
+#[derive(Default)]
+struct SideCache {
+    last: Option<(u32, SideTriangle)>,
+}
+
+impl SideCache {
+    /// Triangle `t` of `side`, read again only when it is not the last one read; `pick`
+    /// chooses its extreme projection on `dir` (`f64::max` or `f64::min`).
+    #[inline]
+    fn read(
+        &mut self,
+        side: &Placed,
+        t: u32,
+        dir: DVec3,
+        pick: fn(f64, f64) -> f64,
+    ) -> SideTriangle {
+        match self.last {
+            Some((u, s)) if u == t => s,
+            _ => {
+                let s = SideTriangle::new(side.triangle(t), dir, pick);
+                self.last = Some((t, s));
+                s
+            }
+        }
+    }
+}
 
 /// Outcome of one descent step.
 enum Step {
@@ -164,6 +233,10 @@ impl Searcher<'_> {
 
     /// The candidate strictly closer than `cur` by more than `epsilon` (the closest; the
     /// first of equals), skipping excluded pairs and those whose boxes are already too far.
+    ///
+    /// Each side's triangle (corners, box, extreme projection) is read once for a run of
+    /// candidates that share it: one side is fixed in a two-step search, and the first
+    /// varies slowest in a full one.
     fn best_of(
         &self,
         cur: &Located,
@@ -182,18 +255,22 @@ impl Searcher<'_> {
         } else {
             DVec3::ZERO
         };
+        let mut side_a = SideCache::default();
+        let mut side_b = SideCache::default();
         for (x, y) in candidates {
             // Bounds first (cheap): nothing at or beyond `best_d` matters, excluded or not.
-            let (a, b) = (self.a.triangle(x), self.b.triangle(y));
+            let a = side_a.read(&self.a, x, dir, f64::max);
+            let b = side_b.read(&self.b, y, dir, f64::min);
             // A lower bound of the distance of two triangles: the gap of their boxes.
-            let mut gap = box_gap(&triangle_box(&a), &triangle_box(&b));
+            let mut gap = box_gap(&a.bounds, &b.bounds);
             if gap < best_d && dir != DVec3::ZERO {
-                let max_a = a
-                    .iter()
-                    .map(|p| p.dot(dir))
-                    .fold(f64::NEG_INFINITY, f64::max);
-                let min_b = b.iter().map(|q| q.dot(dir)).fold(f64::INFINITY, f64::min);
-                gap = gap.max(min_b - max_a);
+                gap = gap.max(b.extreme - a.extreme);
+            }
+            // Each triangle's plane separates the other's corners by at least the distance.
+            if gap < best_d {
+                gap = gap
+                    .max(a.plane_gap(&b.corners))
+                    .max(b.plane_gap(&a.corners));
             }
             if gap >= best_d {
                 continue;
@@ -203,12 +280,12 @@ impl Searcher<'_> {
                 continue;
             }
             counters.evaluations += 1;
-            let cp = closest_points_triangle_triangle(&a, &b);
+            let cp = closest_points_triangle_triangle(&a.corners, &b.corners);
             if excluded {
                 closest_excluded = closest_excluded.min(cp.distance);
             } else if cp.distance < best_d {
                 best_d = cp.distance;
-                best = Some((x, y, a, b, cp));
+                best = Some((x, y, a.corners, b.corners, cp));
             }
         }
         // The descent would rather step into the excluded zone than across a gap: the pair
@@ -242,5 +319,74 @@ impl Searcher<'_> {
                     < l.cp.distance - self.epsilon
         };
         ca.iter().any(|&x| closer(x, l.tb)) || cb.iter().any(|&y| closer(l.ta, y))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::rngs::Xoshiro256PlusPlus;
+    use rand::{RngExt, SeedableRng};
+
+    /// Every bound `best_of` skips a candidate by (box gap, projections on a direction, each
+    /// triangle's plane) is at most the triangles' distance, on random, crossing, coplanar,
+    /// parallel and degenerate triangles; the plane bound is exact for a triangle above a
+    /// parallel one.
+    #[test]
+    fn the_search_bounds_never_exceed_the_distance() {
+        let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+        let mut point = |scale: f64| {
+            DVec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+            ) * scale
+        };
+        let mut cases: Vec<([DVec3; 3], [DVec3; 3])> = Vec::new();
+        for k in 0..4000 {
+            let a = [point(1.0), point(1.0), point(1.0)];
+            let shift = point(3.0);
+            let mut b = [point(1.0) + shift, point(1.0) + shift, point(1.0) + shift];
+            match k % 4 {
+                // Coplanar with a (z = 0 both).
+                1 => {
+                    let flat = |t: [DVec3; 3]| t.map(|p| DVec3::new(p.x, p.y, 0.0));
+                    cases.push((flat(a), flat(b)));
+                    continue;
+                }
+                // b a copy of a, lifted along a's normal.
+                2 => {
+                    let n = (a[1] - a[0]).cross(a[2] - a[0]).normalize_or_zero();
+                    b = a.map(|p| p + n * shift.x.abs());
+                }
+                // A degenerate b (a segment).
+                3 => b[2] = (b[0] + b[1]) * 0.5,
+                _ => {}
+            }
+            cases.push((a, b));
+        }
+        for (a, b) in cases {
+            let d = closest_points_triangle_triangle(&a, &b).distance;
+            let dir = (b[0] - a[1]).normalize_or_zero();
+            let (sa, sb) = (
+                SideTriangle::new(a, dir, f64::max),
+                SideTriangle::new(b, dir, f64::min),
+            );
+            let slack = 1e-12 * (1.0 + d);
+            assert!(box_gap(&sa.bounds, &sb.bounds) <= d + slack);
+            assert!(sb.extreme - sa.extreme <= d + slack);
+            assert!(sa.plane_gap(&b) <= d + slack, "{a:?} {b:?}");
+            assert!(sb.plane_gap(&a) <= d + slack, "{a:?} {b:?}");
+        }
+        // A unit triangle 0.5 above a parallel one: the plane bound is the distance.
+        let low = [DVec3::ZERO, DVec3::X, DVec3::Y];
+        let high = low.map(|p| p + DVec3::Z * 0.5);
+        let s = SideTriangle::new(low, DVec3::Z, f64::max);
+        assert!((s.plane_gap(&high) - 0.5).abs() < 1e-15);
+        assert_eq!(
+            s.plane_gap(&[DVec3::Z, -DVec3::Z, DVec3::X]),
+            0.0,
+            "straddles"
+        );
     }
 }
