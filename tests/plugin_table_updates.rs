@@ -132,3 +132,65 @@ fn tracked_pairs_whose_boxes_are_apart_need_no_work_at_rest() {
     }
     assert!(log(&app).started.is_empty());
 }
+
+/// A pair created while its world boxes are apart (the fat boxes overlap: a collider moved
+/// towards the other) is answered in the run it is created in, not colliding, exactly for
+/// exact and ADB fidelity, without a narrow-phase job; once the boxes meet it is worked on
+/// as a new pair and its contact starts.
+#[test]
+fn a_new_pair_whose_boxes_are_apart_is_answered_without_a_job() {
+    for fidelity in [
+        Fidelity::Exact,
+        Fidelity::Adb { p_min: 0.99 },
+        Fidelity::Bounds,
+    ] {
+        let mut app = app_run_by_hand();
+        let a = spawn(&mut app, (ball(1.0), at(0.0, 0.0, 0.0), fidelity));
+        let b = spawn(&mut app, (ball(1.0), at(3.0, 0.0, 0.0), fidelity));
+        step(&mut app);
+        assert!(
+            app.world().resource::<PairTable>().is_empty(),
+            "{fidelity:?}"
+        );
+        // b moves towards a: its fat box (stretched along the motion) reaches a's, its world
+        // box does not.
+        let mut x = 3.0;
+        let mut created_in = None;
+        for run in 0..3 {
+            x -= 0.3;
+            app.world_mut()
+                .get_mut::<ColliderPose>(b)
+                .unwrap()
+                .0
+                .translation
+                .x = x;
+            step(&mut app);
+            let pairs = app.world().resource::<PairTable>();
+            if created_in.is_none() && pairs.len() == 1 {
+                created_in = Some(run);
+                assert_eq!(pairs.active_pairs(), 0, "{fidelity:?}: no job for it");
+                let o = pairs.outcomes().next().unwrap();
+                assert_eq!((o.a, o.b), (a.min(b), a.max(b)));
+                assert!(!o.collides && o.probability == 0.0, "{fidelity:?}");
+                assert_eq!(o.run, o.computed_run, "{fidelity:?}: answered in this run");
+                let method = match fidelity {
+                    Fidelity::Bounds => Method::Bounds,
+                    Fidelity::Exact => Method::Exact,
+                    _ => Method::Adb,
+                };
+                assert_eq!(o.method, method, "{fidelity:?}");
+            }
+        }
+        assert!(created_in.is_some(), "{fidelity:?}: the pair was created");
+        assert!(log(&app).started.is_empty(), "{fidelity:?}");
+        // The boxes meet and the balls overlap: a new pair's work, and its contact starts.
+        app.world_mut()
+            .get_mut::<ColliderPose>(b)
+            .unwrap()
+            .0
+            .translation
+            .x = 1.5;
+        step(&mut app);
+        assert_eq!(log(&app).started, vec![pair(a, b)], "{fidelity:?}");
+    }
+}

@@ -2,7 +2,9 @@
 //! along its last motion) that it keeps while its world box stays inside. Only colliders whose
 //! world box left their fat box (or whose layers changed) make the broad phase work, and the
 //! pairs they are in are created and removed at that moment; colliders at rest, or moving
-//! inside their fat box, cost nothing here.
+//! inside their fat box, cost nothing here. A new pair whose world boxes are still apart (most
+//! new pairs of a collider that moved far) is answered at once, as the narrow phase would
+//! answer it, and needs no work until the boxes meet.
 //!
 //! New pairs are found by sweep and prune over the fat boxes, kept sorted along one axis from
 //! run to run (an insertion sort, linear when little moved) and split into lanes along a
@@ -24,6 +26,7 @@ use super::budget::BudgetController;
 use super::config::CollisionConfig;
 use super::diagnostics::{CollisionDiagnostics, Stage};
 use super::layers::ContactLayers;
+use super::narrow_phase::answer_if_apart;
 use super::pairs::PairTable;
 use super::parallel::CollisionTaskPool;
 use super::prepare::{ColliderEntry, ColliderTable};
@@ -251,8 +254,12 @@ fn create_found(
     let mut created = 0;
     for &(i, j) in state.found.iter().flatten() {
         let (e, o) = (colliders.entry(i), colliders.entry(j));
-        let p = pairs.create((e.entity, i), (o.entity, j), run);
+        let p = pairs.insert((e.entity, i), (o.entity, j), run);
         link(colliders, pairs, p);
+        // Most new pairs of a box that moved far are still apart: answered here, no job.
+        if !answer_if_apart(colliders, pairs, p, run) {
+            pairs.mark_pending(p, run);
+        }
         created += 1;
     }
     created

@@ -284,11 +284,8 @@ impl Context<'_> {
     /// an exact pair, kept for the others but swept ones) and whether it was tested.
     fn answer(&self, job: &Job, late: bool, s: &mut Scratch) -> (Answer, bool) {
         let (ea, eb) = self.ends(job);
-        let ends = (ea.entity, eb.entity);
         if job.apart {
-            let o =
-                PairOutcome::exact(ends, job.method, 0, job.priority, SmallVec::new(), self.run);
-            let r = Record::of_test(job, &o, (ea, eb), self.run);
+            let (o, r) = apart_answer(job, (ea, eb), self.run);
             return (Answer::Computed(o, Some(r)), false);
         }
         // Past the deadline a rigid exact pair is answered from its memory; a pair with a
@@ -501,6 +498,19 @@ impl Context<'_> {
             }
         }
     }
+}
+
+/// The answer of a pair whose world boxes are apart in `run` (`job.apart`): not colliding,
+/// exactly, and the memory it leaves (its boxes were apart: it needs no work until they meet).
+pub(crate) fn apart_answer(
+    job: &Job,
+    (ea, eb): (&ColliderEntry, &ColliderEntry),
+    run: u64,
+) -> (PairOutcome, Record) {
+    let ends = (ea.entity, eb.entity);
+    let o = PairOutcome::exact(ends, job.method, 0, job.priority, SmallVec::new(), run);
+    let r = Record::of_test(job, &o, (ea, eb), run);
+    (o, r)
 }
 
 /// At most `max` of `pairs`, evenly spread (deterministic).

@@ -30,11 +30,11 @@ use super::pairs::{PairEnds, PairTable};
 use super::parallel::CollisionTaskPool;
 use super::prepare::ColliderTable;
 use super::stamp::stamp;
-use execute::{Answer, ChunkWork, Context, Deadlines, RunCounts};
+use execute::{Answer, ChunkWork, Context, Deadlines, RunCounts, apart_answer};
 pub(crate) use execute::{spread, with_workspaces};
 pub(crate) use memory::{PairMemory, decayed_probability};
 pub use outcome::{Method, PairOutcome};
-use plan::{Job, PlanCounts, choose_tests, plan_jobs};
+use plan::{Job, PlanCounts, choose_tests, pair_method, plan_jobs};
 
 /// What the narrow phase keeps between runs: reused buffers (the measured costs are the
 /// [`BudgetController`]'s).
@@ -248,6 +248,32 @@ pub fn narrow_phase(
     });
     let time = budget.stage_done(Stage::NarrowPhase, start);
     diag.record(Stage::NarrowPhase, time, n as u64);
+}
+
+/// Answers the new pair `p` of two different colliders at once when their world boxes are
+/// apart, as this run's narrow phase would (not colliding, exactly; quiet until a collider's
+/// world box meets the other's), so that it needs no job; returns whether it did. A broad
+/// phase whose boxes moved far in one run creates thousands of such pairs (their fat boxes
+/// overlap, their world boxes not yet).
+pub(crate) fn answer_if_apart(
+    colliders: &ColliderTable,
+    pairs: &mut PairTable,
+    p: u32,
+    run: u64,
+) -> bool {
+    let e = pairs.ends(p);
+    let (a, b) = (e.body_a, e.body_b);
+    let plans = colliders.plans();
+    let (pa, pb) = (&plans[a as usize], &plans[b as usize]);
+    if a == b || pa.aabb.intersects(&pb.aabb) {
+        return false;
+    }
+    let mut job = Job::new(p, a, b);
+    (job.method, job.p_min) = pair_method(pa, pb);
+    job.apart = true;
+    let (o, r) = apart_answer(&job, (colliders.entry(a), colliders.entry(b)), run);
+    pairs.answer(p, o, Some(r), run);
+    true
 }
 
 /// Builds this run's active list: every pair after a change of configuration; otherwise the

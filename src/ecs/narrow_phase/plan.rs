@@ -3,7 +3,7 @@
 use super::super::budget::pair_priority;
 use super::super::components::Fidelity;
 use super::super::pairs::PairTable;
-use super::super::prepare::ColliderTable;
+use super::super::prepare::{BodyPlan, ColliderTable};
 use super::outcome::Method;
 
 /// One active pair's work in this run.
@@ -92,13 +92,7 @@ pub(crate) fn plan_jobs(
             job.method = Method::SelfCollision;
             continue;
         }
-        (job.method, job.p_min) = match ea.fidelity.combine(eb.fidelity) {
-            Fidelity::Tracking { .. } => (Method::Tracking, 1.0),
-            Fidelity::Bounds => (Method::Bounds, 1.0),
-            Fidelity::Exact => (Method::Exact, 1.0),
-            Fidelity::Adb { p_min } if ea.rigid && eb.rigid => (Method::Adb, p_min),
-            Fidelity::Adb { .. } => (Method::Exact, 1.0),
-        };
+        (job.method, job.p_min) = pair_method(ea, eb);
         if !ea.aabb.intersects(&eb.aabb) {
             job.apart = true;
             continue;
@@ -149,6 +143,18 @@ pub(crate) fn plan_jobs(
         job.stale = memory.map_or(u32::MAX, |m| m.stale);
     }
     PlanCounts::count(jobs)
+}
+
+/// How the pair of two different colliders is answered, and its `p_min`: by the combination
+/// of their fidelities (an ADB pair with a deformable collider is answered exactly).
+pub(crate) fn pair_method(ea: &BodyPlan, eb: &BodyPlan) -> (Method, f64) {
+    match ea.fidelity.combine(eb.fidelity) {
+        Fidelity::Tracking { .. } => (Method::Tracking, 1.0),
+        Fidelity::Bounds => (Method::Bounds, 1.0),
+        Fidelity::Exact => (Method::Exact, 1.0),
+        Fidelity::Adb { p_min } if ea.rigid && eb.rigid => (Method::Adb, p_min),
+        Fidelity::Adb { .. } => (Method::Exact, 1.0),
+    }
 }
 
 /// Number of priority buckets ([`priority_bucket`]).

@@ -189,7 +189,15 @@ impl PairTable {
     /// Creates the pair of colliders `(a, body_a)` and `(b, body_b)` (the same for a
     /// self-collision) and puts it on the pending list; returns its slot. The caller links it
     /// to both colliders.
-    pub(crate) fn create(
+    pub(crate) fn create(&mut self, a: (Entity, u32), b: (Entity, u32), run: u64) -> u32 {
+        let i = self.insert(a, b, run);
+        self.mark_pending(i, run);
+        i
+    }
+
+    /// Creates the pair as [`create`](Self::create) does, but not on the pending list: the
+    /// caller answers it or puts it there.
+    pub(crate) fn insert(
         &mut self,
         (a, body_a): (Entity, u32),
         (b, body_b): (Entity, u32),
@@ -243,7 +251,6 @@ impl PairTable {
         if self.filtering && a != b {
             self.created.push(i);
         }
-        self.mark_pending(i, run);
         i
     }
 

@@ -15,6 +15,7 @@ use bevy_ecs::query::QueryItem;
 use bevy_ecs::system::SystemParam;
 use glam::Vec3;
 
+pub(crate) use colliders::BodyPlan;
 pub use colliders::{ColliderEntry, ColliderTable, Geometry};
 use scaled::ScaledTrees;
 #[cfg(feature = "transform")]
