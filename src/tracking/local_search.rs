@@ -234,9 +234,11 @@ impl Searcher<'_> {
     /// The candidate strictly closer than `cur` by more than `epsilon` (the closest; the
     /// first of equals), skipping excluded pairs and those whose boxes are already too far.
     ///
-    /// Each side's triangle (corners, box, extreme projection) is read once for a run of
-    /// candidates that share it: one side is fixed in a two-step search, and the first
-    /// varies slowest in a full one.
+    /// A candidate is skipped when a lower bound of its distance reaches the best so far:
+    /// the gap of the triangles' boxes, of their projections on the current closest
+    /// direction, or of their extents along either triangle's normal. Each side's triangle
+    /// ([`SideTriangle`]) is read once for a run of candidates that share it: one side is
+    /// fixed in a two-step search, and the first varies slowest in a full one.
     fn best_of(
         &self,
         cur: &Located,
