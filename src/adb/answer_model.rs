@@ -7,8 +7,8 @@
 //! trees the traversal saw, and how different the two meshes' sizes are. The frontier's raw
 //! confidence (the pair estimates combined) is one of these features; the model learns how far
 //! to trust it given the others.
+use super::frontier::{CertificateHint, Frontier};
 use super::logistic::{fit_logistic, logistic, logit};
-use super::traverse::{CertificateHint, Frontier};
 
 /// Number of features (the bias included).
 pub const ANSWER_FEATURES: usize = 10;

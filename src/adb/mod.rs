@@ -56,6 +56,7 @@ mod descent;
 mod estimator;
 mod exact;
 mod fit;
+mod frontier;
 mod interior;
 pub(crate) mod logistic;
 mod options;
@@ -80,6 +81,7 @@ pub use estimator::{
 };
 pub use exact::exact_intersects;
 pub use fit::FittedEstimator;
+pub use frontier::{CertificateHint, Frontier};
 pub use interior::{
     InteriorMap, Interpenetration, MAX_SURFACE_SAMPLES, PairCrossing, PairLookup, SampleLookup,
 };
@@ -88,7 +90,6 @@ pub use options::{
 };
 pub use surface_samples::CERTIFY_CHUNK;
 pub use traverse::{
-    AdbOutcome, AdbQuery, AdbWorkspace, AnswerConfidence, CertificateHint, ContactWitness,
-    Frontier, adb_intersects,
+    AdbOutcome, AdbQuery, AdbWorkspace, AnswerConfidence, ContactWitness, adb_intersects,
 };
 pub use tree::{AdbBuildProgress, AdbNode, AdbTree};

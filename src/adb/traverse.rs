@@ -10,6 +10,7 @@ use super::descent::{
     Descent, DescentEnd, DescentFrame, TRIANGLE_TESTS_PER_POP, budget_spent, leaf_pair_hit,
 };
 use super::estimator::{CalibratedEstimator, CollisionEstimator, NodePair, PaperEstimator};
+use super::frontier::{CertificateHint, Frontier};
 use super::interior::{InteriorMap, Interpenetration, PairCrossing, PairLookup};
 use super::options::{
     Budget, Decision, EVIDENCE_REDUNDANCY, FIRST_EVIDENCE_CHECK, MAX_ESTIMATE, Order,
@@ -230,41 +231,6 @@ impl AnswerConfidence {
             Self::Model(m) | Self::PerMeshElseModel(m) => Some(m),
         }
     }
-}
-
-/// What the interpenetration certificate said of a pose it did not settle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum CertificateHint {
-    /// It was not tried (no interior maps, [`AdbQuery::interior_after`] not reached, or no
-    /// map whose confidence could reach `p_min`).
-    #[default]
-    NotTried,
-    /// Every sample it looked up lay outside the other mesh: the pose is probably apart
-    /// ([`PairLookup::Apart`]).
-    Apart,
-    /// It found samples inside but no crossing it could trust ([`PairLookup::Undecided`], or
-    /// a crossing in a map whose confidence is below `p_min`).
-    Undecided,
-}
-
-/// The final frontier of an answer the traversal did not settle (a budget ran out, evidence
-/// decided, or leaf pairs were left to their estimates): the node pairs that together cover
-/// every overlapping leaf pair not ruled out, summed up. [`AdbOutcome::probability`] is made
-/// from these (see [`crate::adb::AnswerModel`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Frontier {
-    /// Node pairs in the frontier (queued, and leaf or pruned pairs left for good).
-    pub pairs: u32,
-    /// `1 − (Π (1 − p))^(1/r)` over the frontier's pair probabilities (`r` disjoint pairs
-    /// counting as one independent piece): the confidence before the answer model.
-    pub raw_confidence: f64,
-    /// The highest pair probability in the frontier.
-    pub max_probability: f64,
-    /// The queued pairs' mean relative depth `(d_A + d_B) / (d_maxA + d_maxB)` (1: leaf pairs
-    /// of the deepest leaves; 0 when none is queued).
-    pub mean_depth: f32,
-    /// What the certificate said.
-    pub certificate: CertificateHint,
 }
 
 /// Reusable memory of the ADB traversal (the queue and the exact-leaf workspace).

@@ -7,10 +7,9 @@ use std::collections::BinaryHeap;
 
 use glam::{DVec3, Vec3};
 
-use super::primitive::{
-    CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,
-};
-use super::query::{ImpactFeatures, TimeOfImpact};
+use super::impact::{ImpactFeatures, TimeOfImpact};
+use super::motion::Trajectory;
+use super::primitive::{CcdScratch, PrimitiveTolerances, edge_edge_time, vertex_face_time};
 use super::swept::{Span, SweptMesh};
 use super::window::{MovingBox, MovingSlab, overlap_window, slab_window};
 use crate::bvh::TrianglePair;

@@ -27,7 +27,9 @@
 //! Next: [`crate::ecs`], the Bevy plugin that runs the discrete queries every step.
 
 mod descent;
+mod impact;
 mod inclusion;
+mod motion;
 mod primitive;
 mod query;
 mod swept;
@@ -35,13 +37,10 @@ mod swept_answer_model;
 mod time_critical;
 pub(crate) mod window;
 
-pub use primitive::{
-    CcdScratch, PrimitiveTolerances, Trajectory, edge_edge_time, vertex_face_time,
-};
-pub use query::{
-    CcdError, CcdOptions, CcdWorkspace, ImpactFeatures, RigidMotion, TimeOfImpact,
-    deforming_time_of_impact, time_of_impact,
-};
+pub use impact::{ImpactFeatures, TimeOfImpact};
+pub use motion::{RigidMotion, Trajectory};
+pub use primitive::{CcdScratch, PrimitiveTolerances, edge_edge_time, vertex_face_time};
+pub use query::{CcdError, CcdOptions, CcdWorkspace, deforming_time_of_impact, time_of_impact};
 pub use swept_answer_model::{SWEPT_FEATURES, SweptAnswerModel, SweptFrontier};
 pub use time_critical::{
     ContinuousAdbOutcome, ContinuousAdbQuery, SweptConfidence, SweptWitness, adb_time_of_impact,

@@ -5,36 +5,8 @@
 use glam::DVec3;
 
 use super::inclusion::{Cell, Problem, Tolerances, earliest_root};
+use super::motion::Trajectory;
 use super::window::{MovingBox, overlap_window};
-
-/// A point's positions at the start and the end of the step.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Trajectory {
-    /// Position at the start of the step.
-    pub start: DVec3,
-    /// Position at the end of the step.
-    pub end: DVec3,
-}
-
-impl Trajectory {
-    /// A point that moves from `start` to `end`.
-    #[inline]
-    pub fn new(start: DVec3, end: DVec3) -> Self {
-        Self { start, end }
-    }
-
-    /// A point that does not move.
-    #[inline]
-    pub fn still(p: DVec3) -> Self {
-        Self { start: p, end: p }
-    }
-
-    /// The position at time `t` of the step.
-    #[inline]
-    pub fn at(&self, t: f64) -> DVec3 {
-        self.start + t * (self.end - self.start)
-    }
-}
 
 /// The tolerances of a continuous test.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -1,51 +1,13 @@
 //! The continuous query between two meshes: the first time of impact over a step.
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 
 use super::descent::{DescentScratch, first_impact};
+use super::impact::{ImpactFeatures, TimeOfImpact};
+use super::motion::RigidMotion;
 use super::primitive::PrimitiveTolerances;
 use super::swept::{BoxFrame, DeformingStep, PoseCache, RigidStep, chord_deviation, mesh_radius};
-use crate::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, TrianglePair, intersects_with};
+use crate::bvh::{CollisionMesh, ExactOptions, QueryWorkspace, intersects_with};
 use crate::geometry::{Pose, closest_points_triangle_triangle};
-
-/// How a rigid mesh moves over the step: from `start` to `end`, its translation linearly and
-/// its rotation at a constant rate about one axis (spherical interpolation, the shorter way).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RigidMotion {
-    /// The pose at the start of the step.
-    pub start: Pose,
-    /// The pose at the end of the step.
-    pub end: Pose,
-}
-
-impl RigidMotion {
-    /// A motion from `start` to `end`.
-    pub fn new(start: Pose, end: Pose) -> Self {
-        Self { start, end }
-    }
-
-    /// A mesh that stays at `pose`.
-    pub fn still(pose: Pose) -> Self {
-        Self {
-            start: pose,
-            end: pose,
-        }
-    }
-
-    /// The pose at time `t ∈ [0, 1]` of the step.
-    pub fn at(&self, t: f32) -> Pose {
-        Pose::new(
-            self.start.translation.lerp(self.end.translation, t),
-            self.start.rotation.slerp(self.end.rotation, t),
-        )
-    }
-
-    /// The angle the mesh turns through over the step (radians, in `[0, π]`).
-    pub fn angle(&self) -> f64 {
-        let (a, b) = (self.start.rotation.as_dquat(), self.end.rotation.as_dquat());
-        let d = a.normalize().dot(b.normalize()).abs().min(1.0);
-        2.0 * d.acos()
-    }
-}
 
 /// Tolerances of the continuous query.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,48 +34,6 @@ impl Default for CcdOptions {
             max_pieces: 4096,
         }
     }
-}
-
-/// Which features meet at the time of impact.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ImpactFeatures {
-    /// A vertex of the first mesh reaches a face of the second.
-    VertexFace {
-        /// The first mesh's vertex.
-        vertex: u32,
-    },
-    /// A vertex of the second mesh reaches a face of the first.
-    FaceVertex {
-        /// The second mesh's vertex.
-        vertex: u32,
-    },
-    /// The surfaces already cross at the start of the step (time 0): the witness triangles
-    /// intersect.
-    Overlapping,
-    /// An edge of each mesh (their vertex indices).
-    EdgeEdge {
-        /// The first mesh's edge.
-        a: [u32; 2],
-        /// The second mesh's edge.
-        b: [u32; 2],
-    },
-}
-
-/// The first contact of two moving meshes.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TimeOfImpact {
-    /// When, as a fraction of the step in `[0, 1]`: never after the meshes first touch, and
-    /// no earlier than the last moment they were more than the distance tolerance apart (up
-    /// to the time tolerance).
-    pub time: f32,
-    /// Where, in world coordinates.
-    pub point: Vec3,
-    /// The contact normal, a unit vector pointing from the second mesh towards the first.
-    pub normal: Vec3,
-    /// The triangles that meet.
-    pub triangles: TrianglePair,
-    /// The features that meet.
-    pub features: ImpactFeatures,
 }
 
 /// A continuous query's input that cannot be answered.

@@ -6,8 +6,7 @@ use std::cell::OnceCell;
 
 use glam::{DMat3, DQuat, DVec3, Mat3, Vec3};
 
-use super::primitive::Trajectory;
-use super::query::RigidMotion;
+use super::motion::{RigidMotion, Trajectory};
 use super::window::{MovingBox, MovingSlab};
 use crate::bvh::{Bvh, CollisionMesh, NodeSlab};
 use crate::geometry::{Aabb, PoseF64};

@@ -16,9 +16,10 @@ use std::time::Instant;
 use glam::Vec3;
 
 use super::descent::{SearchLimit, search};
+use super::impact::TimeOfImpact;
+use super::motion::RigidMotion;
 use super::query::{
-    CcdError, CcdOptions, CcdWorkspace, RigidMotion, RigidPair, TimeOfImpact, overlap_at_start,
-    validate_motions,
+    CcdError, CcdOptions, CcdWorkspace, RigidPair, overlap_at_start, validate_motions,
 };
 use super::swept_answer_model::{SweptAnswerModel, SweptFrontier};
 use crate::adb::{AdbTree, Budget, CalibratedEstimator, CollisionEstimator, NodePair};

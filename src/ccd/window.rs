@@ -9,7 +9,7 @@
 //! half-lines, one per face pair, each from a linear inequality in `s`.
 use glam::DVec3;
 
-use super::primitive::Trajectory;
+use super::motion::Trajectory;
 use crate::bvh::NodeSlab;
 use crate::geometry::Aabb;
 

@@ -12,13 +12,15 @@
 //! Next: [`crate::bvh::CollisionMesh`] turns a generated mesh into a collider of the exact
 //! queries, [`crate::ecs::MeshCollider`] into a collider of the plugin.
 
+mod random_shapes;
+
 use std::collections::HashMap;
 use std::f32::consts::TAU;
 
 use glam::Vec3;
 
 use super::TriMesh;
-pub use super::random_shapes::{noisy_sphere, random_tube};
+pub use random_shapes::{noisy_sphere, random_tube};
 
 /// Highest subdivision level [`icosphere`] accepts (20·4¹⁰ ≈ 21 million triangles); higher
 /// levels are lowered to it.

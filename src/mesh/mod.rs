@@ -16,7 +16,6 @@ pub mod generate;
 mod local_exclusion;
 mod mass;
 mod obj;
-mod random_shapes;
 mod rings;
 mod topology;
 mod tri_mesh;

@@ -20,7 +20,7 @@
 
 use std::time::{Duration, Instant};
 
-use super::sampling::sharp_edges_of;
+use super::sharp_edges::sharp_edges_of;
 use super::surface::TrackedSurface;
 
 /// Blocks hold about this many patches (at least, where the tree allows): fewer, and the
@@ -266,7 +266,7 @@ impl KeptCandidates {
 mod tests {
     use super::*;
     use crate::mesh::generate;
-    use crate::tracking::sampling::sharp_edges;
+    use crate::tracking::sharp_edges::sharp_edges;
     use glam::Vec3;
 
     const MARGIN: f32 = 0.02;

@@ -55,6 +55,7 @@ mod patch_reach;
 mod patch_tree;
 mod pruning;
 mod sampling;
+mod sharp_edges;
 mod surface;
 mod sweep;
 mod timing;

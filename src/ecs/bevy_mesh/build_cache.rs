@@ -9,7 +9,7 @@ use bevy_mesh::Mesh;
 use bevy_tasks::futures::check_ready;
 use bevy_tasks::{AsyncComputeTaskPool, Task, TaskPool};
 
-use super::constructor::MeshColliderConstructor;
+use super::components::MeshColliderConstructor;
 use super::convert::{BevyMeshError, MeshSource};
 use crate::bvh::CollisionMesh;
 use crate::ecs::components::MeshCollider;

@@ -57,6 +57,7 @@
 //! assert!(app.world().get::<MeshColliderConstructor>(e).is_none());
 //! ```
 mod build_cache;
+mod components;
 mod constructor;
 mod convert;
 
@@ -66,7 +67,7 @@ use bevy_ecs::prelude::*;
 use bevy_mesh::Mesh;
 
 pub use build_cache::MeshColliderCache;
-pub use constructor::{MeshColliderConstructor, MeshColliderConstructorHierarchy, MeshNameFilter};
+pub use components::{MeshColliderConstructor, MeshColliderConstructorHierarchy, MeshNameFilter};
 pub use convert::{BevyMeshError, trimesh_from_bevy_mesh};
 
 #[cfg(doc)]

@@ -10,7 +10,7 @@ use smallvec::SmallVec;
 use super::super::components::{ContinuousCollision, Fidelity};
 use super::super::layers::ContactLayers;
 use super::super::stamp::{age_stamp, stamp, stamp_sweep_due};
-use super::deformed::DeformedStates;
+use super::deformed::{DeformedStates, placed};
 use crate::adb::AdbTree;
 use crate::bvh::CollisionMesh;
 use crate::ccd::RigidMotion;
@@ -375,5 +375,30 @@ impl ColliderTable {
     /// Frees the slot of a removed collider (its proxy and pairs are gone).
     pub(crate) fn free_slot(&mut self, i: u32) {
         self.free.push(i);
+    }
+}
+
+impl ColliderEntry {
+    /// Its mesh in world coordinates at the start and at the end of its motion in `run`: a
+    /// swept deformable's states before and now; a rigid collider at its previous pose and
+    /// its pose when it moved in the run (else at its pose, both); another deformable where it
+    /// is now.
+    pub(crate) fn world_states(&self, run: u64) -> (Arc<CollisionMesh>, Arc<CollisionMesh>) {
+        if let Some(d) = &self.deformed
+            && self.swept_run == run
+            && let Some(before) = &d.before
+        {
+            return (before.clone(), d.now.clone());
+        }
+        let mesh = self.geometry.mesh();
+        let end = Arc::new(placed(mesh, &self.pose));
+        let motion = self.motion_in(run);
+        let start = match &self.geometry {
+            Geometry::Rigid(_) if motion.start != motion.end => {
+                Arc::new(placed(mesh, &motion.start))
+            }
+            _ => end.clone(),
+        };
+        (start, end)
     }
 }

@@ -9,7 +9,6 @@
 use std::sync::Arc;
 
 use super::super::components::ContinuousCollision;
-use super::colliders::{ColliderEntry, Geometry};
 use crate::bvh::CollisionMesh;
 use crate::geometry::{Aabb, Pose};
 
@@ -57,7 +56,7 @@ impl DeformedStates {
 }
 
 /// `mesh` with its vertices placed at `pose` (a copy; the same tree structure, refitted).
-fn placed(mesh: &CollisionMesh, pose: &Pose) -> CollisionMesh {
+pub(super) fn placed(mesh: &CollisionMesh, pose: &Pose) -> CollisionMesh {
     let mut out = mesh.clone();
     if *pose != Pose::IDENTITY {
         let world: Vec<_> = mesh
@@ -79,29 +78,4 @@ fn same_structure(a: &CollisionMesh, b: &CollisionMesh) -> bool {
     a.mesh().triangles() == b.mesh().triangles()
         && a.bvh().nodes().len() == b.bvh().nodes().len()
         && a.bvh().leaf_triangles() == b.bvh().leaf_triangles()
-}
-
-impl ColliderEntry {
-    /// Its mesh in world coordinates at the start and at the end of its motion in `run`: a
-    /// swept deformable's states before and now; a rigid collider at its previous pose and
-    /// its pose when it moved in the run (else at its pose, both); another deformable where it
-    /// is now.
-    pub(crate) fn world_states(&self, run: u64) -> (Arc<CollisionMesh>, Arc<CollisionMesh>) {
-        if let Some(d) = &self.deformed
-            && self.swept_run == run
-            && let Some(before) = &d.before
-        {
-            return (before.clone(), d.now.clone());
-        }
-        let mesh = self.geometry.mesh();
-        let end = Arc::new(placed(mesh, &self.pose));
-        let motion = self.motion_in(run);
-        let start = match &self.geometry {
-            Geometry::Rigid(_) if motion.start != motion.end => {
-                Arc::new(placed(mesh, &motion.start))
-            }
-            _ => end.clone(),
-        };
-        (start, end)
-    }
 }

@@ -1,5 +1,5 @@
 //! Seeded shape generators: meshes no test or constant was chosen on, for held-out
-//! evaluation (re-exported by [`super::generate`]).
+//! evaluation (re-exported by [`generate`](super)).
 
 use std::f32::consts::TAU;
 
@@ -7,14 +7,14 @@ use glam::Vec3;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 
-use super::TriMesh;
-use super::generate::{icosphere, tube};
+use super::super::TriMesh;
+use super::{icosphere, tube};
 
 /// Sinusoids in each lateral direction of a [`random_tube`]'s centre line.
 const WAVES: usize = 3;
 
 /// A capped tube of `radius` and `radial_segments` × `length_segments` like
-/// [`tube`](super::generate::tube), whose centre line runs along Y from `-length/2` to
+/// [`tube`](super::tube), whose centre line runs along Y from `-length/2` to
 /// `length/2` and wanders sideways along a seeded sum of sinusoids (up to 3 waves over the
 /// length in each direction). The bend is bounded so that the centre line's curvature stays
 /// below `1 / (2·radius)` and its sideways offset within `length / 8`: the tube does not
@@ -109,7 +109,7 @@ pub fn random_tube(
     }
 }
 
-/// An [`icosphere`](super::generate::icosphere) of `radius` and `subdivisions` whose every
+/// An [`icosphere`](super::icosphere) of `radius` and `subdivisions` whose every
 /// vertex is moved along its direction from the centre by a seeded uniform factor in
 /// `[1 − noise, 1 + noise]` (`noise` clamped to `[0, 0.9]`): a noisy, and with a large
 /// `noise` spiky, closed star-shaped surface that does not touch itself at rest.
