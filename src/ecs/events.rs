@@ -194,6 +194,7 @@ pub fn report_collisions(
     mut budget: ResMut<BudgetController>,
     mut diag: ResMut<CollisionDiagnostics>,
     mut fresh: Local<Vec<Contact>>,
+    mut flips: Local<TouchingFlips>,
 ) {
     let start = budget.now();
     let frame = budget.run();
@@ -202,6 +203,14 @@ pub fn report_collisions(
         .transitions
         .sort_unstable_by_key(|t| (t.a, t.b, t.started));
     let (mut started, mut ended) = (0u64, 0u64);
+    // Each end's touching list takes this run's flips in one merge (below), in the order
+    // found: ends, then starts.
+    let TouchingFlips {
+        flips,
+        one_entity,
+        merged,
+    } = &mut *flips;
+    flips.clear();
     for pass_started in [false, true] {
         for t in pairs
             .transitions
@@ -210,7 +219,9 @@ pub fn report_collisions(
         {
             let (a, b, method, probability, time_of_impact) =
                 (t.a, t.b, t.method, t.probability, t.time_of_impact);
-            set_colliding(&mut colliding, a, b, t.started);
+            if a != b {
+                flips.extend([(a, b, t.started), (b, a, t.started)]);
+            }
             if t.started {
                 started += 1;
                 let event = |entity, other| CollisionStarted {
@@ -233,6 +244,15 @@ pub fn report_collisions(
                 writers.ended.write(event(a, b));
                 notify(&mut commands, &observed, a, b, event);
             }
+        }
+    }
+    // A stable sort keeps the order of one pair's end and start within a run.
+    flips.sort_by_key(|f| (f.0, f.1));
+    for group in flips.chunk_by(|x, y| x.0 == y.0) {
+        if let Ok(mut touching) = colliding.get_mut(group[0].0) {
+            one_entity.clear();
+            one_entity.extend(group.iter().map(|f| (f.1, f.2)));
+            touching.apply(one_entity, merged);
         }
     }
     // This run's contacts, in pair order.
@@ -294,20 +314,13 @@ pub struct ReportWriters<'w> {
     contacts: MessageWriter<'w, Contact>,
 }
 
-/// Updates both entities' [`TouchingEntities`] (not for a self-collision).
-fn set_colliding(q: &mut Query<&mut TouchingEntities>, a: Entity, b: Entity, touching: bool) {
-    if a == b {
-        return;
-    }
-    for (x, y) in [(a, b), (b, a)] {
-        if let Ok(mut c) = q.get_mut(x) {
-            if touching {
-                c.insert(y);
-            } else {
-                c.remove(y);
-            }
-        }
-    }
+/// The Report's memory for the touching lists, reused from run to run: this run's flips
+/// (entity, other, touching now), one entity's flips, and the merged list.
+#[derive(Default)]
+pub struct TouchingFlips {
+    flips: Vec<(Entity, Entity, bool)>,
+    one_entity: Vec<(Entity, bool)>,
+    merged: Vec<Entity>,
 }
 
 /// Triggers the observer event on each endpoint that opted in, as `(observed, other)`.
