@@ -61,7 +61,10 @@ impl TouchingEntities {
             }
         }
         scratch.extend(kept);
-        std::mem::swap(&mut self.0, scratch);
+        // Copied back rather than swapped: each list keeps its own memory, so a run
+        // allocates nothing once the lists have grown.
+        self.0.clear();
+        self.0.extend_from_slice(scratch);
     }
 }
 
