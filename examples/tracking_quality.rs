@@ -4,7 +4,7 @@
 //! cargo run --release --example tracking_quality -- [--mesh PATH|generated:NAME]
 //!     [--motion whirl|crumple|local] [--frames 120] [--seed S] [--pairs-per-frame N] [--budget-us US] [--json out.json] [--out-dir DIR] \
 //!     [--sweep a,b,c | --no-sweep] [--sampling hierarchy|uniform|velocity] [--search two-step|full]
-//!     [--patch-size N] [--overlaps-per-pair K|none]
+//!     [--patch-size N] [--overlaps-per-pair K|none] [--multiresolution on|off]
 //! ```
 //!
 //! The main run uses the tracker's defaults: at least `--pairs-per-frame` (64) new pairs per
@@ -12,6 +12,9 @@
 //! pairs, `TrackerConfig::overlaps_per_pair`; `none`: exactly `--pairs-per-frame`). The sweep
 //! (`--sweep`, by default 16, 32, 64, 128, 256 and `--pairs-per-frame`) runs fixed numbers of
 //! new pairs per frame: what recall each number buys.
+//!
+//! `--multiresolution off` searches every new pair over triangles from where it was drawn
+//! instead of first over vertices (`TrackerConfig::multiresolution`), for comparisons.
 //!
 //! `--budget-us US` gives the tracker a time budget per step (`TrackerConfig::time_budget`):
 //! it adapts its new pairs per frame, starting from `--pairs-per-frame`, to what the budget
@@ -55,6 +58,9 @@
 //! `overlaps_per_pair` (of the main run; `null` when its pairs per frame were fixed), `budget_us`, `breakdown_us`
 //! (mean wall-clock µs per frame of the surface update and of each stage of the step:
 //! candidates, sampling, local search, pruning, propagation; `StepTimes`),
+//! `evaluations_per_frame` (triangle distances the local search and propagation measured,
+//! `StepStats::evaluations`), `coarse_per_frame` (what the multiresolution coarse level did
+//! with the new pairs, `StepStats::coarse`: started, refined, far, sliding, duplicate),
 //! and the same for each `sweep` entry. Writes `frames.csv`, `sweep.csv`,
 //! `recall_vs_pairs.svg` and `time_vs_pairs.svg` to `--out-dir` (default
 //! `target/tracking_quality`). With `TRACKING_QUALITY_DEBUG=1`, each missed region is listed
@@ -144,6 +150,8 @@ struct Settings {
     patch_size: u32,
     /// `TrackerConfig::overlaps_per_pair` of the main run.
     overlaps_per_pair: Option<u32>,
+    /// `TrackerConfig::multiresolution`.
+    multiresolution: bool,
 }
 
 fn parse_args() -> Result<Settings, String> {
@@ -161,6 +169,7 @@ fn parse_args() -> Result<Settings, String> {
         budget_us: None,
         patch_size: DEFAULT_PATCH_SIZE,
         overlaps_per_pair: TrackerConfig::default().overlaps_per_pair,
+        multiresolution: TrackerConfig::default().multiresolution,
     };
     let mut explicit_sweep = false;
     let mut it = std::env::args_os().skip(1);
@@ -226,6 +235,13 @@ fn parse_args() -> Result<Settings, String> {
                     }
                 }
             }
+            "--multiresolution" => {
+                s.multiresolution = match text(it.next(), "--multiresolution")?.as_str() {
+                    "on" => true,
+                    "off" => false,
+                    o => return Err(format!("unknown --multiresolution `{o}` (on|off)")),
+                }
+            }
             "--search" => {
                 s.search = match text(it.next(), "--search")?.as_str() {
                     "two-step" => SearchMode::TwoStep,
@@ -235,7 +251,7 @@ fn parse_args() -> Result<Settings, String> {
             }
             other => {
                 return Err(format!(
-                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --patch-size, --overlaps-per-pair, --json, --out-dir, --sweep, --no-sweep, --sampling, --search)"
+                    "unknown argument `{other}` (known: --mesh, --motion, --frames, --seed, --pairs-per-frame, --budget-us, --patch-size, --overlaps-per-pair, --json, --out-dir, --sweep, --no-sweep, --sampling, --search, --multiresolution)"
                 ));
             }
         }
@@ -534,7 +550,17 @@ struct RunResult {
     /// (`TrackedSurface::update_time`), then the step's `StepTimes` (candidates, sampling,
     /// local search, pruning, propagation).
     breakdown_us: [f64; 6],
+    /// Mean per frame of the multiresolution coarse level's counts: new pairs started at
+    /// the vertex level, refined and searched, left far, sliding, duplicate
+    /// (`StepStats::coarse`).
+    coarse: [f64; 5],
+    /// Mean triangle distances evaluated per frame by the search and propagation
+    /// (`StepStats::evaluations`).
+    evaluations: f64,
 }
+
+/// Names of [`RunResult::coarse`]'s entries.
+const COARSE: [&str; 5] = ["started", "refined", "far", "sliding", "duplicate"];
 
 /// Names of [`RunResult::breakdown_us`]'s entries.
 const STAGES: [&str; 6] = [
@@ -570,6 +596,8 @@ fn run_tracker(
     let (mut depth_errors, mut normal_errors) = (Vec::new(), Vec::new());
     let mut exact_set: HashSet<(u32, u32)> = HashSet::new();
     let mut breakdown = [0.0f64; 6];
+    let mut coarse = [0.0f64; 5];
+    let mut evaluations = 0.0;
     for (f, exact) in truth.frames.iter().enumerate() {
         whirl.positions(f, &mut positions);
         let t0 = cpu_us();
@@ -581,6 +609,14 @@ fn run_tracker(
         total_us += us;
         pairs_drawn += tracker.stats().pairs_per_frame;
         let times = tracker.stats().times;
+        let c = tracker.stats().coarse;
+        for (sum, n) in coarse
+            .iter_mut()
+            .zip([c.started, c.refined, c.far, c.sliding, c.duplicate])
+        {
+            *sum += n as f64;
+        }
+        evaluations += tracker.stats().evaluations as f64;
         for (sum, d) in breakdown.iter_mut().zip([
             surface.update_time(),
             times.candidates,
@@ -738,6 +774,8 @@ fn run_tracker(
         },
         per_frame,
         breakdown_us: breakdown.map(|t| t / frames.max(1) as f64),
+        coarse: coarse.map(|n| n / frames.max(1) as f64),
+        evaluations: evaluations / frames.max(1) as f64,
     }
 }
 
@@ -791,7 +829,7 @@ fn ring_distance(mesh: &TriMesh, topology: &Topology, a: u32, b: u32, limit: u32
 
 fn json_run(r: &RunResult) -> String {
     format!(
-        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"strict_false_contact_rate\": {:.4}, \"contacts\": {}, \"apart_contacts\": {}, \"depth_error_mean\": {:.3e}, \"depth_error_p95\": {:.3e}, \"normal_error_deg_mean\": {:.3e}, \"normal_error_deg_p95\": {:.3e}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}, \"breakdown_us\": {{{}}}",
+        "\"pairs_per_frame\": {}, \"mean_pairs_per_frame\": {:.1}, \"budget_us\": {}, \"recall\": {:.4}, \"false_contact_rate\": {:.4}, \"strict_false_contact_rate\": {:.4}, \"contacts\": {}, \"apart_contacts\": {}, \"depth_error_mean\": {:.3e}, \"depth_error_p95\": {:.3e}, \"normal_error_deg_mean\": {:.3e}, \"normal_error_deg_p95\": {:.3e}, \"pair_coverage\": {:.4}, \"regions\": {}, \"latency_frames_p95\": {:.1}, \"tracker_us_per_frame\": {:.1}, \"exact_us_per_frame\": {:.1}, \"time_ratio\": {:.4}, \"breakdown_us\": {{{}}}, \"evaluations_per_frame\": {:.1}, \"coarse_per_frame\": {{{}}}",
         r.pairs_per_frame,
         r.mean_pairs,
         r.budget_us.map_or("null".to_owned(), |b| b.to_string()),
@@ -810,16 +848,32 @@ fn json_run(r: &RunResult) -> String {
         r.tracker_us,
         r.exact_us,
         r.tracker_us / r.exact_us.max(1e-9),
-        breakdown(r, |name, us| format!("\"{name}\": {us:.1}"))
+        breakdown(r, |name, us| format!("\"{name}\": {us:.1}")),
+        r.evaluations,
+        coarse_counts(r, |name, n| format!("\"{name}\": {n:.1}"))
     )
+}
+
+/// `r`'s mean coarse-level counts per frame, each written by `item`, separated by commas.
+fn coarse_counts(r: &RunResult, item: impl Fn(&str, f64) -> String) -> String {
+    named(&COARSE, r.coarse, item)
 }
 
 /// `r`'s per-frame breakdown, each stage written by `item`, separated by commas.
 fn breakdown(r: &RunResult, item: impl Fn(&str, f64) -> String) -> String {
-    STAGES
+    named(&STAGES, r.breakdown_us, item)
+}
+
+/// Each of `values` with its name, written by `item`, separated by commas.
+fn named<const N: usize>(
+    names: &[&str; N],
+    values: [f64; N],
+    item: impl Fn(&str, f64) -> String,
+) -> String {
+    names
         .iter()
-        .zip(r.breakdown_us)
-        .map(|(name, us)| item(name, us))
+        .zip(values)
+        .map(|(name, v)| item(name, v))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -960,6 +1014,7 @@ fn main() {
     config.time_budget = settings.budget_us.map(std::time::Duration::from_micros);
     config.sampling = settings.sampling;
     config.search = settings.search;
+    config.multiresolution = settings.multiresolution;
     let tolerance = probe.mean_edge_length();
     println!(
         "tracking_quality: {name} ({}): {} triangles, {} boundary edges, {} non-manifold; {} frames, {} {} episode(s); thickness {:.4}, tolerance {:.4}",
@@ -1069,6 +1124,16 @@ fn main() {
         "per-frame breakdown at {} pairs/f (wall-clock µs, mean): {}",
         main_label,
         breakdown(&main_run, |name, us| format!("{name} {us:.0}"))
+    );
+    println!(
+        "per frame (mean): {:.0} triangle distances searched; coarse level (--multiresolution {}): {}",
+        main_run.evaluations,
+        if settings.multiresolution {
+            "on"
+        } else {
+            "off"
+        },
+        coarse_counts(&main_run, |name, n| format!("{name} {n:.1}"))
     );
     if adaptive {
         println!(

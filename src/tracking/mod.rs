@@ -47,6 +47,7 @@
 
 mod boxes;
 mod candidates;
+mod coarse;
 mod config;
 mod contact;
 mod feature;
@@ -62,6 +63,7 @@ mod timing;
 mod tracker;
 
 pub use crate::mesh::triangles_within_rings;
+pub use coarse::CoarseCounts;
 pub use config::{Sampling, SearchMode, TRAINING_MESHES, TRAINING_SEEDS, TrackerConfig};
 pub use contact::Contact;
 pub use feature::{Feature, FeatureShape, FeatureVertices, feature_distance};

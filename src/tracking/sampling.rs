@@ -48,6 +48,9 @@ pub(crate) struct SamplerScratch {
     /// New pairs this frame's [`draw`] was to draw: the request's count, or more with
     /// [`DrawRequest::overlaps_per_pair`].
     pub count: usize,
+    /// Where this frame's crease probes lie among the pairs drawn (they start within the
+    /// thickness: the coarse level has nothing to do for them).
+    pub crease_starts: std::ops::Range<usize>,
     /// Time spent this frame finding candidates (patch overlaps, covered patch pairs, sharp
     /// edges); the rest of [`draw`] is sampling.
     pub candidates_time: std::time::Duration,
@@ -123,6 +126,7 @@ pub(crate) fn draw(
     scratch.count = n;
     scratch.candidates_time = std::time::Duration::ZERO;
     scratch.kept.refreshed = 0;
+    scratch.crease_starts = 0..0;
     if n == 0 {
         return;
     }
@@ -238,8 +242,10 @@ pub(crate) fn draw(
             }
             let mut budget = n - uniform_n;
             if self_mode {
+                let first = out.len();
                 budget -=
                     crease_probes(n / CREASE_SHARE, a, request, rng, scratch, out).min(budget);
+                scratch.crease_starts = first..out.len();
             }
             let xf = b.pose.as_ref().map(box_transform);
             let (bvh_a, bvh_b) = (&a.surface.patches.bvh, &b.surface.patches.bvh);

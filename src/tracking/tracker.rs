@@ -8,6 +8,7 @@ use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use smallvec::SmallVec;
 
+use super::coarse::{CoarseCounts, CoarseSearch, CoarseStart};
 use super::config::TrackerConfig;
 use super::contact::Contact;
 use super::feature::Feature;
@@ -137,6 +138,9 @@ pub struct StepStats {
     pub candidate_lists_refreshed: usize,
     /// The kept candidate lists there are (0 between two meshes).
     pub candidate_lists: usize,
+    /// What the coarse level did with the new pairs
+    /// ([`TrackerConfig::multiresolution`]; all zero without it).
+    pub coarse: CoarseCounts,
     /// Where the step's time went.
     pub times: StepTimes,
 }
@@ -223,6 +227,8 @@ enum Stillness {
 #[derive(Debug, Default, Clone)]
 struct Scratch {
     starts: Vec<(u32, u32)>,
+    /// The vertex pairs of kept pairs and of this step's refined coarse starts.
+    coarse_seen: HashSet<(u32, u32)>,
     pairs: Vec<TrackedPair>,
     sampler: SamplerScratch,
     prune: PruneScratch,
@@ -637,7 +643,26 @@ impl Tracker {
             Stillness::Nothing => true,
             Stillness::LastUpdate => a.surface.still_around(t),
         };
-        for (k, (ta, tb, age, before)) in kept.chain(fresh).enumerate() {
+        // Multiresolution: new pairs (not the crease probes) start at the vertex level.
+        let kept_count = self.pairs.len();
+        let crease = s.sampler.crease_starts.clone();
+        let mut coarse = cfg.multiresolution.then(|| CoarseSearch {
+            a,
+            b,
+            excluded_pairs: searcher.excluded_pairs,
+            far_factor: cfg.far_factor as f64,
+            far_epsilon: far_eps as f64,
+            thickness: searcher.thickness,
+            closest: self
+                .pairs
+                .iter()
+                .map(|p| p.distance.max(0.0))
+                .fold(f64::INFINITY, f64::min),
+            slide_limit: searcher.slide_limit,
+        });
+        s.coarse_seen.clear();
+        let mut seen_filled = false;
+        for (k, (mut ta, mut tb, age, before)) in kept.chain(fresh).enumerate() {
             // A settled pair nothing moved around finds itself again: kept as it is.
             if let Some(p) = before.filter(|p| p.settled && still(ta) && still(tb)) {
                 stats.still += 1;
@@ -657,6 +682,34 @@ impl Tracker {
                 };
             if !search && age == 0 {
                 continue;
+            }
+            if let Some(coarse) = coarse.as_mut().filter(|_| age == 0) {
+                let drawn = k - kept_count;
+                if !crease.contains(&drawn) {
+                    if !seen_filled {
+                        // The kept pairs' vertex pairs: a start coming to rest on one of
+                        // them would find that pair again.
+                        seen_filled = true;
+                        for p in s.pairs.iter() {
+                            for v in a.corners(p.triangle_a) {
+                                for w in b.corners(p.triangle_b) {
+                                    s.coarse_seen.insert(key(self_mode, v, w));
+                                }
+                            }
+                        }
+                    }
+                    match coarse.start(ta, tb, &mut stats.coarse) {
+                        (CoarseStart::Refine(x, y), (v, w)) => {
+                            if !s.coarse_seen.insert(key(self_mode, v, w)) {
+                                stats.coarse.duplicate += 1;
+                                continue;
+                            }
+                            stats.coarse.refined += 1;
+                            (ta, tb) = (x, y);
+                        }
+                        _ => continue,
+                    }
+                }
             }
             let start = searcher.locate(ta, tb, &mut counters);
             let (l, sliding, settled) = if search {
