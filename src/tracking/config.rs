@@ -152,7 +152,7 @@ impl Default for TrackerConfig {
             thickness: 0.0,
             far_factor: 1.2,
             far_epsilon: 0.01,
-            exclusion_rings: 2,
+            exclusion_rings: super::DEFAULT_EXCLUSION_RINGS,
             redundancy_rings: 2,
             max_active_pairs: 1024,
             propagation_limit: 256,

@@ -68,7 +68,7 @@ pub use config::{Sampling, SearchMode, TRAINING_MESHES, TRAINING_SEEDS, TrackerC
 pub use contact::Contact;
 pub use feature::{Feature, FeatureShape, FeatureVertices, feature_distance};
 pub use pruning::PruneCounts;
-pub use surface::{DEFAULT_PATCH_SIZE, TrackedSurface};
+pub use surface::{DEFAULT_EXCLUSION_RINGS, DEFAULT_PATCH_SIZE, TrackedSurface};
 pub use sweep::MAX_SWEEP_RINGS;
 pub use timing::StepTimes;
 pub use tracker::{PairList, StepStats, TrackedPair, Tracker};

@@ -705,12 +705,13 @@ mod tests {
         for (k, (mesh, positions, thickness)) in cases.into_iter().enumerate() {
             let mut surface = TrackedSurface::new(mesh);
             surface.set_positions(&positions).unwrap();
-            for rings in [2, 3] {
+            for rings in [2, 3, 4] {
                 let excluded = surface.excluded_pairs(rings);
                 assert_eq!(
                     matches!(excluded, ExcludedPairs::Cached { .. }),
-                    rings == 2,
-                    "both kinds of exclusion are tried"
+                    rings != 4,
+                    "the exclusion built with the surface, the first other ring count's and a \
+                     walk of the topology are all tried"
                 );
                 let request = DrawRequest {
                     sampling: Sampling::Hierarchy,

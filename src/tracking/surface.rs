@@ -10,6 +10,10 @@ use crate::mesh::{MeshError, SelfExclusion, Topology, TriMesh, triangles_within_
 /// Default largest number of triangles in a patch of the incomplete hierarchy.
 pub const DEFAULT_PATCH_SIZE: u32 = 64;
 
+/// The ring count whose self-collision exclusion a [`TrackedSurface`] builds with itself:
+/// [`TrackerConfig::exclusion_rings`](super::TrackerConfig::exclusion_rings)'s default.
+pub const DEFAULT_EXCLUSION_RINGS: u32 = 2;
+
 /// A triangle mesh prepared for stochastic tracking: its [`Topology`] (feature neighbours),
 /// a table for sampling points uniformly over its area, the previous frame's positions (for
 /// velocity-driven sampling), and Kimmerle's incomplete hierarchy (a BVH cut at patches,
@@ -35,10 +39,14 @@ pub struct TrackedSurface {
     max_displacement: f32,
     /// Per vertex, one bit: whether the last one moved it.
     moved: Vec<u64>,
-    /// The self-collision exclusion of the first ring count asked for (built on first use by
-    /// [`TrackedSurface::excluded_pairs`]; it holds for any positions), with the patches
-    /// each patch's triangles can be excluded with.
-    exclusion: std::sync::OnceLock<(SelfExclusion, PatchReach)>,
+    /// The self-collision exclusion of the default ring count
+    /// ([`DEFAULT_EXCLUSION_RINGS`], built with the surface: it holds for any positions, and a
+    /// tracker's first step does not stall building it), with the patches each patch's
+    /// triangles can be excluded with.
+    exclusion: (SelfExclusion, PatchReach),
+    /// The same for the first other ring count asked for (built on first use by
+    /// [`TrackedSurface::excluded_pairs`]).
+    other_exclusion: std::sync::OnceLock<(SelfExclusion, PatchReach)>,
     /// The [welded](TriMesh::welded) mesh and its topology, when welding joins some corners
     /// (seams, poles): rings for the exclusion are counted there.
     welded: Option<Box<(TriMesh, Topology)>>,
@@ -134,6 +142,16 @@ impl TrackedSurface {
             }
         };
         let mesh_vertex_words = mesh.vertex_count().div_ceil(64);
+        let exclusion = {
+            let (m, t) = match &welded {
+                Some(welded) => (&welded.0, &welded.1),
+                None => (&mesh, &topology),
+            };
+            (
+                SelfExclusion::from_topology(m, t, DEFAULT_EXCLUSION_RINGS),
+                PatchReach::new(&patches, m, t, DEFAULT_EXCLUSION_RINGS),
+            )
+        };
         TrackedSurface {
             welded,
             previous: mesh.positions().to_vec(),
@@ -148,7 +166,8 @@ impl TrackedSurface {
             generation: 0,
             max_displacement: 0.0,
             moved: vec![0; mesh_vertex_words],
-            exclusion: std::sync::OnceLock::new(),
+            exclusion,
+            other_exclusion: std::sync::OnceLock::new(),
             id: {
                 static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
                 NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
@@ -257,20 +276,25 @@ impl TrackedSurface {
     }
 
     /// The pairs of triangles within `rings` vertex rings of each other on the welded mesh
-    /// (self-collision leaves them out; see [`SelfExclusion::new`]). The first ring count asked for gets a [`SelfExclusion`] built once
-    /// (`O(triangles)`, about 64 bytes per triangle) and kept: its test is one merge of two
-    /// short lists. Other ring counts walk the topology on every test.
+    /// (self-collision leaves them out; see [`SelfExclusion::new`]). [`DEFAULT_EXCLUSION_RINGS`]
+    /// has its [`SelfExclusion`] built with the surface, and the first other ring count asked
+    /// for gets one built then (`O(triangles)`, about 64 bytes per triangle) and kept: its test
+    /// is one merge of two short lists. Further ring counts walk the topology on every test.
     pub(crate) fn excluded_pairs(&self, rings: u32) -> ExcludedPairs<'_> {
         let (mesh, topology) = match &self.welded {
             Some(welded) => (&welded.0, &welded.1),
             None => (&self.mesh, &self.topology),
         };
-        let (cached, reach) = self.exclusion.get_or_init(|| {
-            (
-                SelfExclusion::from_topology(mesh, topology, rings),
-                PatchReach::new(&self.patches, mesh, topology, rings),
-            )
-        });
+        let (cached, reach) = if self.exclusion.0.rings() == rings {
+            &self.exclusion
+        } else {
+            self.other_exclusion.get_or_init(|| {
+                (
+                    SelfExclusion::from_topology(mesh, topology, rings),
+                    PatchReach::new(&self.patches, mesh, topology, rings),
+                )
+            })
+        };
         if cached.rings() == rings {
             ExcludedPairs::Cached {
                 exclusion: cached,
@@ -459,7 +483,7 @@ mod tests {
                     patch_of,
                 } = surface.excluded_pairs(rings)
                 else {
-                    panic!("the first ring count asked for is cached");
+                    panic!("the default and the first other ring count asked for are cached");
                 };
                 let n = mesh.triangle_count() as u32;
                 let mut filtered = 0usize;
@@ -487,9 +511,11 @@ mod tests {
         let surface = TrackedSurface::new(generate::torus(1.0, 0.3, 12, 8));
         let (mesh, topology) = (surface.mesh(), surface.topology());
         let n = mesh.triangle_count() as u32;
-        for rings in [2, 1, 3, 2] {
+        // The default ring count's exclusion is built with the surface, the first other one
+        // asked for (1) on first use; 3 walks the topology.
+        for rings in [2, 1, 3, 2, 1] {
             let excluded = surface.excluded_pairs(rings);
-            assert_eq!(matches!(excluded, ExcludedPairs::Cached { .. }), rings == 2);
+            assert_eq!(matches!(excluded, ExcludedPairs::Cached { .. }), rings != 3);
             for a in 0..n {
                 for b in 0..n {
                     let corners = |t: u32| mesh.triangles()[t as usize];
