@@ -5,12 +5,15 @@
 //! pairs (vertex, edge or triangle of each mesh) that are *locally* closest, and updates it
 //! every frame: new random pairs are drawn (uniformly, by velocity, or inside the overlapping
 //! patches of a shallow hierarchy), each pair descends to a locally closest pair through the
-//! mesh topology, unwanted pairs are pruned, and the pairs closer than the surfaces' thickness
-//! are reported as [`Contact`]s, extended by propagation to their neighbourhood. Pairs persist
-//! across frames, so a contact found once is followed as the surfaces move. The answer is
-//! approximate: a contact region no pair has reached yet is not reported.
+//! mesh topology (a new pair first over the vertices, and over triangles only where it can be
+//! kept: [`TrackerConfig::multiresolution`]), unwanted pairs are pruned, and the pairs closer
+//! than the surfaces' thickness are reported as [`Contact`]s, extended by propagation to their
+//! neighbourhood. Pairs persist across frames, so a contact found once is followed as the
+//! surfaces move. The answer is approximate: a contact region no pair has reached yet is not
+//! reported.
 //!
-//! - [`TrackedSurface`]: a mesh prepared for tracking (topology, sampling tables, patches);
+//! - [`TrackedSurface`]: a mesh prepared for tracking (topology, sampling tables, patches, the
+//!   self-collision exclusion);
 //!   deform it with [`TrackedSurface::set_positions`].
 //! - [`Tracker`]: the pair list and the per-frame step, for a pair of meshes
 //!   ([`Tracker::step_pair`]) or one mesh against itself ([`Tracker::step_self`]).

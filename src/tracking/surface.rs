@@ -16,8 +16,10 @@ pub const DEFAULT_EXCLUSION_RINGS: u32 = 2;
 
 /// A triangle mesh prepared for stochastic tracking: its [`Topology`] (feature neighbours),
 /// a table for sampling points uniformly over its area, the previous frame's positions (for
-/// velocity-driven sampling), and Kimmerle's incomplete hierarchy (a BVH cut at patches,
-/// refitted on every [`TrackedSurface::set_positions`]).
+/// velocity-driven sampling), Kimmerle's incomplete hierarchy (a BVH cut at patches,
+/// refitted on every [`TrackedSurface::set_positions`]), and the self-collision exclusion of
+/// [`DEFAULT_EXCLUSION_RINGS`] (`O(triangles)`, about 64 bytes a triangle: built here so that
+/// a tracker's first step does not stall on it).
 ///
 /// Deform it in place with [`TrackedSurface::set_positions`] (same triangles); the topology
 /// never changes.
