@@ -61,8 +61,8 @@ pub(crate) struct CoarseSearch<'a> {
     pub far_epsilon: f64,
     pub thickness: f64,
     /// An upper bound of the closest pair's distance `d_min` after this step: the closest
-    /// kept pair's, lowered by every vertex pair a start comes to rest on (the triangles at
-    /// a vertex pair are at most as far apart as the vertices).
+    /// kept pair's, lowered by the vertex pair of every start refined (the triangles at a
+    /// vertex pair are at most as far apart as the vertices, and a search only gets closer).
     pub closest: f64,
     /// A self pair this far apart that has a closer excluded neighbour is sliding.
     pub slide_limit: f64,
@@ -202,14 +202,19 @@ impl CoarseSearch<'_> {
                 break;
             }
         }
-        self.closest = self.closest.min(d2.sqrt());
-        let keep = (self.far_factor * self.closest + self.far_epsilon).max(self.thickness);
+        // Refined, this start's triangles are at most `d` apart: `d_min` is at most `d`.
+        let d = d2.sqrt();
+        let closest = self.closest.min(d);
+        let keep = (self.far_factor * closest + self.far_epsilon).max(self.thickness);
         if self.lower_bound(v, p, w, q, d2, counts) > keep {
             counts.far += 1;
             return (CoarseStart::Far, (v, w));
         }
         match self.triangles_at(v, w) {
-            Some((x, y)) => (CoarseStart::Refine(x, y), (v, w)),
+            Some((x, y)) => {
+                self.closest = closest;
+                (CoarseStart::Refine(x, y), (v, w))
+            }
             None => {
                 counts.sliding += 1;
                 (CoarseStart::Sliding, (v, w))
