@@ -9,7 +9,7 @@
 //! its other corners are neighbours of `v`). So any two triangles at vertices `v` and `w`
 //! are at least `|v w| − ρ(v) − ρ(w)` apart. A start whose bound exceeds what the pruning
 //! keeps (`k·d_min + ε`, with `d_min` bounded from above by the closest kept pair and by the
-//! vertex pairs the step's starts came to rest on) would start a triangle pair that the
+//! vertex pairs the step's refined starts came to rest on) would start a triangle pair that the
 //! pruning drops, unless its search slid far from there: the cut is a bet, as the local
 //! search is, not a proof.
 
