@@ -144,16 +144,8 @@ impl TrackedSurface {
             }
         };
         let mesh_vertex_words = mesh.vertex_count().div_ceil(64);
-        let exclusion = {
-            let (m, t) = match &welded {
-                Some(welded) => (&welded.0, &welded.1),
-                None => (&mesh, &topology),
-            };
-            (
-                SelfExclusion::from_topology(m, t, DEFAULT_EXCLUSION_RINGS),
-                PatchReach::new(&patches, m, t, DEFAULT_EXCLUSION_RINGS),
-            )
-        };
+        let (m, t) = ring_mesh(&welded, &mesh, &topology);
+        let exclusion = exclusion_of(m, t, &patches, DEFAULT_EXCLUSION_RINGS);
         TrackedSurface {
             welded,
             previous: mesh.positions().to_vec(),
@@ -283,19 +275,12 @@ impl TrackedSurface {
     /// for gets one built then (`O(triangles)`, about 64 bytes per triangle) and kept: its test
     /// is one merge of two short lists. Further ring counts walk the topology on every test.
     pub(crate) fn excluded_pairs(&self, rings: u32) -> ExcludedPairs<'_> {
-        let (mesh, topology) = match &self.welded {
-            Some(welded) => (&welded.0, &welded.1),
-            None => (&self.mesh, &self.topology),
-        };
+        let (mesh, topology) = ring_mesh(&self.welded, &self.mesh, &self.topology);
         let (cached, reach) = if self.exclusion.0.rings() == rings {
             &self.exclusion
         } else {
-            self.other_exclusion.get_or_init(|| {
-                (
-                    SelfExclusion::from_topology(mesh, topology, rings),
-                    PatchReach::new(&self.patches, mesh, topology, rings),
-                )
-            })
+            self.other_exclusion
+                .get_or_init(|| exclusion_of(mesh, topology, &self.patches, rings))
         };
         if cached.rings() == rings {
             ExcludedPairs::Cached {
@@ -348,6 +333,32 @@ impl TrackedSurface {
             .partition_point(|&c| c <= x)
             .min(self.area_cdf.len() - 1) as u32
     }
+}
+
+/// The mesh whose rings self-collision counts: the welded one when welding joined corners.
+fn ring_mesh<'a>(
+    welded: &'a Option<Box<(TriMesh, Topology)>>,
+    mesh: &'a TriMesh,
+    topology: &'a Topology,
+) -> (&'a TriMesh, &'a Topology) {
+    match welded {
+        Some(welded) => (&welded.0, &welded.1),
+        None => (mesh, topology),
+    }
+}
+
+/// The exclusion of `rings` rings on `mesh` (the [`ring_mesh`]), with the patches each of
+/// `patches`' patches can be excluded with.
+fn exclusion_of(
+    mesh: &TriMesh,
+    topology: &Topology,
+    patches: &PatchTree,
+    rings: u32,
+) -> (SelfExclusion, PatchReach) {
+    (
+        SelfExclusion::from_topology(mesh, topology, rings),
+        PatchReach::new(patches, mesh, topology, rings),
+    )
 }
 
 /// Unit normals of `mesh`'s triangles (zero for degenerate ones), written to `out`.
