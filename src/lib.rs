@@ -123,6 +123,7 @@ pub mod ecs;
 pub mod geometry;
 pub mod mesh;
 pub mod poses;
+mod prefetch;
 pub mod tracking;
 
 /// The types most programs need, in one import.

@@ -7,11 +7,11 @@ use std::time::Instant;
 
 use super::options::{Budget, TIME_CHECK_INTERVAL, UNESTIMATED};
 use super::queue::Entry;
-use super::sample_lookup::prefetch;
 use super::tree::{AdbTree, prepare_first, prepare_second};
 use crate::bvh::box_test::RelativeFrame;
 use crate::bvh::{BvhNode, QueryWorkspace, TrianglePair};
 use crate::geometry::{PoseF64, triangles_intersect};
+use crate::prefetch::prefetch;
 
 /// Triangle tests that count as one pop toward the time budget's clock check.
 pub(super) const TRIANGLE_TESTS_PER_POP: u32 = 4;

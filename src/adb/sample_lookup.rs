@@ -8,6 +8,7 @@ use super::interior::{
 use super::surface_samples::{CERTIFY_CHUNK, NO_COMPONENT, REFINEMENT, SurfaceSamples};
 use super::voxel_map::VoxelMap;
 use crate::geometry::Pose;
+use crate::prefetch::prefetch;
 
 /// The interpenetration certificate's queries of an [`InteriorMap`] (the data and its build are
 /// in the map's own module).
@@ -329,21 +330,6 @@ impl<'a> Lookup<'a> {
             depth: self.other.depth_inside(p),
         }
     }
-}
-
-/// Asks the CPU to bring the byte at `byte` into the cache (a hint: no effect on the result,
-/// nothing read, whatever the address; nothing on targets without the instruction).
-#[inline(always)]
-pub(super) fn prefetch(byte: *const u8) {
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch never faults, whatever the address, and reads nothing the program
-    // sees; SSE is part of the x86_64 baseline.
-    unsafe {
-        use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
-        _mm_prefetch::<_MM_HINT_T0>(byte.cast());
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = byte;
 }
 
 /// The even bits of a chunk's 2-bit classes (one per sample).

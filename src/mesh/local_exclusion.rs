@@ -33,9 +33,23 @@ impl LocalExclusion {
         if self.bit_of.len() < vertices {
             self.bit_of.resize(vertices, 0);
         }
+        // The lists lie scattered over the whole mesh's: asked for all at once, their loads
+        // overlap.
+        for &t in triangles {
+            exclusion.prefetch_lists(t);
+        }
         for &t in triangles {
             let (outer, inner) = exclusion.lists(t);
-            let (Some(first), Some(second)) = (self.mask(outer), self.mask(inner)) else {
+            let Some(first) = self.mask(outer) else {
+                return false;
+            };
+            // With an even number of rings both lists are the same one.
+            let second = if std::ptr::eq(outer, inner) {
+                Some(first)
+            } else {
+                self.mask(inner)
+            };
+            let Some(second) = second else {
                 return false;
             };
             self.first.push(first);

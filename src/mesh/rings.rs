@@ -210,6 +210,19 @@ impl SelfExclusion {
         )
     }
 
+    /// Asks for triangle `t`'s lists to be brought into the cache, for a
+    /// [`SelfExclusion::lists`] or [`SelfExclusion::excludes`] on it soon after (a hint: no
+    /// effect on any answer).
+    #[inline]
+    pub(crate) fn prefetch_lists(&self, t: u32) {
+        if (t as usize) < self.outer.short.len() {
+            self.outer.prefetch(t);
+            if let Some(inner) = &self.inner {
+                inner.prefetch(t);
+            }
+        }
+    }
+
     /// Whether triangles `a` and `b` (indices into the mesh it was built for) are within the
     /// excluded rings: the same answer as [`triangles_within_rings`] on their corners in the
     /// welded mesh.
@@ -273,6 +286,14 @@ impl Neighbourhoods {
             out.long_offsets.push(out.long.len() as u32);
         }
         out
+    }
+
+    /// Asks for triangle `t`'s list to be brought into the cache (a long list: its first
+    /// entries).
+    #[inline]
+    fn prefetch(&self, t: u32) {
+        let list = &self.short[t as usize];
+        crate::prefetch::prefetch(std::ptr::from_ref(list).cast());
     }
 
     #[inline]

@@ -14,6 +14,7 @@
 //! search is, not a proof.
 
 use glam::DVec3;
+use smallvec::SmallVec;
 
 use super::surface::{ExcludedPairs, Placed};
 
@@ -223,21 +224,27 @@ impl CoarseSearch<'_> {
     }
 
     /// The pair of triangles at vertices `v` and `w`, not excluded, whose centroids are
-    /// closest (the exact search refines it).
+    /// closest (the first of equals, in the order of the vertices' triangle lists; the exact
+    /// search refines it). The exclusion is asked only of a pair closer than the best so far.
     fn triangles_at(&self, v: u32, w: u32) -> Option<(u32, u32)> {
         let centroid = |side: &Placed, t: u32| {
             let [x, y, z] = side.triangle(t);
             (x + y + z) / 3.0
         };
+        let at_w: SmallVec<[(u32, DVec3); 16]> = self
+            .b
+            .topology()
+            .vertex_triangles(w)
+            .iter()
+            .map(|&y| (y, centroid(&self.b, y)))
+            .collect();
         let mut best: Option<(f64, u32, u32)> = None;
         for &x in self.a.topology().vertex_triangles(v) {
             let cx = centroid(&self.a, x);
-            for &y in self.b.topology().vertex_triangles(w) {
-                if self.excluded_pairs.is_some_and(|e| e.excludes(x, y)) {
-                    continue;
-                }
-                let d = cx.distance_squared(centroid(&self.b, y));
-                if best.is_none_or(|(e, _, _)| d < e) {
+            for &(y, cy) in &at_w {
+                let d = cx.distance_squared(cy);
+                let closer = best.is_none_or(|(e, _, _)| d < e);
+                if closer && !self.excluded_pairs.is_some_and(|e| e.excludes(x, y)) {
                     best = Some((d, x, y));
                 }
             }

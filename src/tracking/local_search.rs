@@ -105,15 +105,14 @@ impl SideCache {
         t: u32,
         dir: DVec3,
         pick: fn(f64, f64) -> f64,
-    ) -> SideTriangle {
-        match self.last {
-            Some((u, s)) if u == t => s,
-            _ => {
-                let s = SideTriangle::new(side.triangle(t), dir, pick);
-                self.last = Some((t, s));
-                s
-            }
+    ) -> &SideTriangle {
+        if self.last.as_ref().is_some_and(|(u, _)| *u != t) {
+            self.last = None;
         }
+        let (_, s) = self
+            .last
+            .get_or_insert_with(|| (t, SideTriangle::new(side.triangle(t), dir, pick)));
+        s
     }
 }
 

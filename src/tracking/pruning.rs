@@ -1,7 +1,7 @@
 //! Removing unwanted pairs: too far (Guy and Debunne), converged to the same features, or
 //! redundant by topological ring distance.
 
-use std::collections::HashMap;
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 
 use smallvec::SmallVec;
 
@@ -94,7 +94,7 @@ pub(crate) fn prune(
         counts.far += before - pairs.len();
     }
     // Same feature pair: keep the first (closest).
-    let mut seen = std::collections::HashSet::with_capacity(pairs.len());
+    let mut seen = HashSet::with_capacity_and_hasher(pairs.len(), Default::default());
     let before = pairs.len();
     pairs.retain(|p| seen.insert((p.feature_a, p.feature_b)));
     counts.duplicate += before - pairs.len();

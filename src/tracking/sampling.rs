@@ -21,7 +21,7 @@ pub(crate) struct SamplerScratch {
     /// Patch pairs holding a known contact, sorted (a few dozen, looked up for each of up to
     /// tens of thousands of overlapping pairs).
     covered: Vec<(u32, u32)>,
-    known_triangles: std::collections::HashSet<u32>,
+    known_triangles: rustc_hash::FxHashSet<u32>,
     near_known: Vec<u32>,
     /// Crease probe candidates: (sharpness key, edge, collapsed rather than folded).
     sharp: Vec<(f32, u32, bool)>,

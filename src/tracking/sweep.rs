@@ -8,7 +8,7 @@
 //! the first mesh's frame), the pairs whose swept boxes meet are decided by the exact
 //! continuous primitives of [`crate::ccd`] (three vertex–face tests each way, nine edge–edge
 //! tests), and the earliest time at which they touch is the pair's time of impact.
-use std::collections::HashSet;
+use rustc_hash::FxHashSet as HashSet;
 
 use glam::DVec3;
 

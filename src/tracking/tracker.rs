@@ -1,6 +1,6 @@
 //! The tracker: persistent feature pairs, updated every frame.
 
-use std::collections::{HashMap, HashSet};
+use rustc_hash::{FxHashMap as HashMap, FxHashSet as HashSet};
 use std::time::{Duration, Instant};
 
 use glam::DVec3;
