@@ -172,6 +172,66 @@ fn a_fast_ball_never_passes_through_a_thin_wall() {
     }
 }
 
+/// The same shots through a thin wall with the whole scene scaled down a thousand times and
+/// up a hundred times: the time of impact stays within 1e-4 of the step of the reference at
+/// every scale (a tolerance fixed in world units would make the small scene's answers
+/// coarser: 1e-5 units is about 1.7e-3 of the small shot's step), and so the three scales
+/// agree.
+#[test]
+fn times_of_impact_keep_their_precision_when_the_scene_is_scaled() {
+    let (ball, wall) = (
+        generate::icosphere(0.5, 2),
+        generate::cuboid(Vec3::new(0.05, 3.0, 3.0), 2),
+    );
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(41);
+    let shots: Vec<(Vec3, Vec3, f32)> = (0..6)
+        .map(|_| {
+            let (y, z) = (
+                rng.random_range(-1.0..1.0f32),
+                rng.random_range(-1.0..1.0f32),
+            );
+            let start = Vec3::new(-4.0, y, z);
+            let end = Vec3::new(2.0, y + rng.random_range(-0.5..0.5), z);
+            (start, end, rng.random_range(-1.0..1.0))
+        })
+        .collect();
+    let mut times = Vec::new();
+    for scale in [1.0f32, 1e-3, 100.0] {
+        let sized = |m: &stochastic_collision::mesh::TriMesh| {
+            CollisionMesh::new(m.scaled(Vec3::splat(scale)).unwrap())
+        };
+        let (ball, wall) = (sized(&ball), sized(&wall));
+        let still = RigidMotion::still(Pose::IDENTITY);
+        let at_scale: Vec<f32> = shots
+            .iter()
+            .map(|&(start, end, turn)| {
+                let shot = RigidMotion::new(
+                    Pose::from_translation(start * scale),
+                    Pose::new(end * scale, Quat::from_rotation_z(turn)),
+                );
+                let hit = toi(&ball, &shot, &wall, &still).expect("the shot crosses the wall");
+                let reference = reference_time(&ball, &shot, &wall, &still, 1000).unwrap();
+                assert!(
+                    hit.time <= reference + 1e-6 && hit.time >= reference - 1e-4,
+                    "scale {scale}: {} against the reference's {reference}",
+                    hit.time
+                );
+                hit.time
+            })
+            .collect();
+        times.push(at_scale);
+    }
+    for (k, t) in times[0].iter().enumerate() {
+        for other in &times[1..] {
+            assert!(
+                (other[k] - t).abs() <= 2e-4,
+                "shot {k}: {t} and {}",
+                other[k]
+            );
+        }
+    }
+}
+
 #[test]
 fn a_rotating_bar_sweeping_through_a_box_is_caught() {
     // A bar 4 long turning 90° about z within the step; a small box on its path, at 45°,

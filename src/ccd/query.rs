@@ -14,15 +14,22 @@ use crate::geometry::{Pose, closest_points_triangle_triangle};
 pub struct CcdOptions {
     /// Features closer than this (world units, in each coordinate) count as touching: the
     /// query reports contact when the meshes come this close, and never later than they
-    /// touch. Default `1e-5`.
+    /// touch. Default `1e-5`. For small meshes [`CcdOptions::relative_tolerance`] is the
+    /// tighter one.
     pub distance_tolerance: f32,
+    /// The same as a fraction of the smaller mesh's size (half its box's diagonal): the query
+    /// uses the smaller of the two tolerances, so that scaling a scene down does not make its
+    /// times of impact coarser (a contact reported within the tolerance comes early by about
+    /// the tolerance over the speed at which the features approach). `0` leaves
+    /// `distance_tolerance` alone. Default `1e-6`.
+    pub relative_tolerance: f32,
     /// The time resolution of the answer where features move fast (a fraction of the step).
     /// Default `1e-5`.
     pub time_tolerance: f32,
-    /// A rotating mesh's step is cut into pieces over which its vertices stray at most
-    /// `distance_tolerance / 2` from straight paths; at most this many (beyond, each piece's
-    /// tolerance grows by what its vertices stray: still conservative, less precise).
-    /// Default 4096.
+    /// A rotating mesh's step is cut into pieces over which its vertices stray at most half
+    /// the distance tolerance (the smaller of the two above) from straight paths; at most
+    /// this many (beyond, each piece's tolerance grows by what its vertices stray: still
+    /// conservative, less precise). Default 4096.
     pub max_pieces: u32,
 }
 
@@ -30,10 +37,31 @@ impl Default for CcdOptions {
     fn default() -> Self {
         Self {
             distance_tolerance: 1e-5,
+            relative_tolerance: 1e-6,
             time_tolerance: 1e-5,
             max_pieces: 4096,
         }
     }
+}
+
+impl CcdOptions {
+    /// The distance tolerance for meshes of sizes `a` and `b` (half their boxes' diagonals):
+    /// the smaller of [`CcdOptions::distance_tolerance`] and
+    /// [`CcdOptions::relative_tolerance`] times the smaller size.
+    pub(crate) fn distance_for(&self, a: f64, b: f64) -> f64 {
+        let absolute = f64::from(self.distance_tolerance.max(0.0));
+        let relative = f64::from(self.relative_tolerance.max(0.0)) * a.min(b);
+        if relative > 0.0 {
+            absolute.min(relative)
+        } else {
+            absolute
+        }
+    }
+}
+
+/// Half the diagonal of `mesh`'s box: its size, for [`CcdOptions::distance_for`].
+pub(crate) fn mesh_size(mesh: &CollisionMesh) -> f64 {
+    0.5 * f64::from(mesh.bvh().root_aabb().extents().length())
 }
 
 /// A continuous query's input that cannot be answered.
@@ -175,7 +203,7 @@ impl<'a> RigidPair<'a> {
         options: &CcdOptions,
         poses: &'a mut (PoseCache, PoseCache),
     ) -> Self {
-        let delta = options.distance_tolerance.max(0.0) as f64;
+        let delta = options.distance_for(mesh_size(a), mesh_size(b));
         let pieces_for = |mesh: &CollisionMesh, m: &RigidMotion| {
             let angle = m.angle();
             if angle == 0.0 {
@@ -249,7 +277,7 @@ pub fn deforming_time_of_impact(
         return Ok(Some(hit));
     }
     let tol = PrimitiveTolerances {
-        distance: options.distance_tolerance.max(0.0) as f64,
+        distance: options.distance_for(mesh_size(a.0), mesh_size(b.0)),
         time: options.time_tolerance.max(0.0) as f64,
         ..Default::default()
     };
