@@ -288,8 +288,8 @@ impl Neighbourhoods {
         out
     }
 
-    /// Asks for triangle `t`'s list to be brought into the cache (a long list: its first
-    /// entries).
+    /// Asks for triangle `t`'s list to be brought into the cache when it is held in place (a
+    /// long list's entries, in the shared array, are not asked for: only its length).
     #[inline]
     fn prefetch(&self, t: u32) {
         let list = &self.short[t as usize];
